@@ -1,0 +1,76 @@
+// Rotation helpers for error-state models: skew, exponential and logarithm maps on SO(3) and
+// the right Jacobian. Templated on the scalar (as Sophus is) so that Ceres Jets can flow
+// through the same code in the factor-graph smoother.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cmath>
+
+namespace ctxfuse::so3 {
+
+template <class Scalar>
+using Vec3 = Eigen::Matrix<Scalar, 3, 1>;
+template <class Scalar>
+using Mat3 = Eigen::Matrix<Scalar, 3, 3>;
+
+template <class Derived>
+Mat3<typename Derived::Scalar> skew(const Eigen::MatrixBase<Derived>& v) {
+  using S = typename Derived::Scalar;
+  Mat3<S> m;
+  m << S(0), -v(2), v(1), v(2), S(0), -v(0), -v(1), v(0), S(0);
+  return m;
+}
+
+/// Unit quaternion of the rotation vector phi (angle |phi| about phi/|phi|).
+template <class Derived>
+Eigen::Quaternion<typename Derived::Scalar> exp_quat(const Eigen::MatrixBase<Derived>& phi) {
+  using S = typename Derived::Scalar;
+  using std::cos;
+  using std::sin;
+  using std::sqrt;
+  const S theta2 = phi.squaredNorm();
+  if (theta2 < S(1e-16)) {
+    // Second-order series; the normalisation keeps it a unit quaternion.
+    Eigen::Quaternion<S> q(S(1) - theta2 / S(8), phi(0) / S(2), phi(1) / S(2), phi(2) / S(2));
+    q.normalize();
+    return q;
+  }
+  const S theta = sqrt(theta2);
+  const S k = sin(theta / S(2)) / theta;
+  return Eigen::Quaternion<S>(cos(theta / S(2)), k * phi(0), k * phi(1), k * phi(2));
+}
+
+template <class Derived>
+Mat3<typename Derived::Scalar> exp(const Eigen::MatrixBase<Derived>& phi) {
+  return exp_quat(phi).toRotationMatrix();
+}
+
+/// Rotation vector of a unit quaternion, angle in [0, pi].
+template <class Scalar>
+Vec3<Scalar> log(const Eigen::Quaternion<Scalar>& q_in) {
+  using std::atan2;
+  using std::sqrt;
+  Eigen::Quaternion<Scalar> q = q_in;
+  if (q.w() < Scalar(0)) q.coeffs() = -q.coeffs();  // shortest rotation
+  const Vec3<Scalar> v = q.vec();
+  const Scalar s2 = v.squaredNorm();
+  if (s2 < Scalar(1e-16)) return Scalar(2) * v / q.w();
+  const Scalar s = sqrt(s2);
+  return Scalar(2) * atan2(s, q.w()) / s * v;
+}
+
+/// Right Jacobian Jr(phi): Exp(phi + d) ~= Exp(phi) Exp(Jr(phi) d).
+template <class Derived>
+Mat3<typename Derived::Scalar> right_jacobian(const Eigen::MatrixBase<Derived>& phi) {
+  using S = typename Derived::Scalar;
+  using std::cos;
+  using std::sin;
+  using std::sqrt;
+  const S theta2 = phi.squaredNorm();
+  const Mat3<S> K = skew(phi);
+  if (theta2 < S(1e-10)) return Mat3<S>::Identity() - K / S(2) + K * K / S(6);
+  const S theta = sqrt(theta2);
+  return Mat3<S>::Identity() - (S(1) - cos(theta)) / theta2 * K + (theta - sin(theta)) / (theta2 * theta) * K * K;
+}
+
+}  // namespace ctxfuse::so3

@@ -1,0 +1,93 @@
+// Result of a filter step. A step either commits (accepted) or leaves the estimate exactly as
+// it was, and says why: gated by the innovation test, invalid input (which one), or a numerical
+// failure. Errors are values, never asserts or exits: an estimator in a vehicle must keep going.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <string_view>
+
+namespace ctxfuse {
+
+enum class Outcome : std::uint8_t {
+  accepted,           // the estimate was changed
+  gated,              // measurement valid but rejected by the gate; statistic/threshold tell why
+  invalid_input,      // a caller-supplied value is unusable; `problem` names it
+  numerical_failure,  // the numbers went bad inside the step; `problem` names where
+};
+
+enum class Problem : std::uint8_t {
+  none,
+  non_finite_measurement,
+  measurement_magnitude,          // |z| above FilterOptions::max_abs_measurement
+  measurement_out_of_domain,      // e.g. a negative range; reported by the model's check()
+  measurement_noise_non_finite,
+  measurement_noise_not_positive_definite,
+  non_finite_input,
+  input_magnitude,                // |u| above FilterOptions::max_abs_input (or model's own check)
+  process_noise_non_finite,
+  process_noise_negative_variance,
+  non_finite_dt,
+  non_positive_dt,
+  dt_above_maximum,
+  out_of_order_time,
+  time_not_set,
+  non_finite_prediction,          // the model produced NaN/Inf (state or Jacobian)
+  innovation_not_positive_definite,
+  non_finite_covariance,
+  non_finite_state,
+};
+
+constexpr std::string_view describe(Problem p) {
+  switch (p) {
+    case Problem::none: return "none";
+    case Problem::non_finite_measurement: return "measurement contains NaN or Inf";
+    case Problem::measurement_magnitude: return "measurement magnitude above the configured maximum";
+    case Problem::measurement_out_of_domain: return "measurement outside the model's domain";
+    case Problem::measurement_noise_non_finite: return "measurement noise contains NaN or Inf";
+    case Problem::measurement_noise_not_positive_definite: return "measurement noise is not positive definite";
+    case Problem::non_finite_input: return "process input contains NaN or Inf";
+    case Problem::input_magnitude: return "process input magnitude above the configured maximum";
+    case Problem::process_noise_non_finite: return "process noise contains NaN or Inf";
+    case Problem::process_noise_negative_variance: return "process noise has a negative variance";
+    case Problem::non_finite_dt: return "time step is NaN or Inf";
+    case Problem::non_positive_dt: return "time step is zero or negative";
+    case Problem::dt_above_maximum: return "time step above the configured maximum";
+    case Problem::out_of_order_time: return "time stamp earlier than the filter time";
+    case Problem::time_not_set: return "filter time not set before a timed step";
+    case Problem::non_finite_prediction: return "model prediction or Jacobian contains NaN or Inf";
+    case Problem::innovation_not_positive_definite: return "innovation covariance is not positive definite";
+    case Problem::non_finite_covariance: return "updated covariance contains NaN or Inf";
+    case Problem::non_finite_state: return "updated state contains NaN or Inf";
+  }
+  return "unknown";
+}
+
+constexpr std::string_view describe(Outcome o) {
+  switch (o) {
+    case Outcome::accepted: return "accepted";
+    case Outcome::gated: return "gated";
+    case Outcome::invalid_input: return "invalid input";
+    case Outcome::numerical_failure: return "numerical failure";
+  }
+  return "unknown";
+}
+
+struct Status {
+  Outcome outcome = Outcome::accepted;
+  Problem problem = Problem::none;
+  int dof = 0;  // measurement dimension for updates, 0 for predictions
+  // Normalised innovation squared y' S^-1 y, and the gate threshold it was compared with.
+  double nis = std::numeric_limits<double>::quiet_NaN();
+  double gate_threshold = std::numeric_limits<double>::infinity();
+  // log N(y; 0, S): what an IMM needs for mode probabilities. Set for accepted and gated.
+  double log_likelihood = std::numeric_limits<double>::quiet_NaN();
+
+  constexpr bool accepted() const { return outcome == Outcome::accepted; }
+  constexpr explicit operator bool() const { return accepted(); }
+
+  static constexpr Status invalid(Problem p) { return Status{Outcome::invalid_input, p}; }
+  static constexpr Status failure(Problem p) { return Status{Outcome::numerical_failure, p}; }
+};
+
+}  // namespace ctxfuse

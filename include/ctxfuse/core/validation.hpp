@@ -1,0 +1,73 @@
+// Input checks shared by every filter step. Each returns the first Problem found, or
+// Problem::none; the caller turns it into a Status before touching the estimate.
+#pragma once
+
+#include <cmath>
+#include <concepts>
+#include <limits>
+#include <type_traits>
+
+#include "ctxfuse/core/numerics.hpp"
+#include "ctxfuse/core/status.hpp"
+#include "ctxfuse/core/types.hpp"
+
+namespace ctxfuse {
+
+/// Limits a filter enforces on what it is given. The defaults reject only the absurd; tighten
+/// them to what the sensors can physically produce.
+struct FilterOptions {
+  double max_dt = 10.0;                  // [s] longer gaps call for re-initialisation, not prediction
+  double max_abs_measurement = 1e9;      // any element of z
+  double max_abs_input = 1e6;            // any element of u (Eigen inputs, or via max_abs())
+};
+
+inline Problem check_dt(double dt, const FilterOptions& opts) {
+  if (!std::isfinite(dt)) return Problem::non_finite_dt;
+  if (dt <= 0.0) return Problem::non_positive_dt;
+  if (dt > opts.max_dt) return Problem::dt_above_maximum;
+  return Problem::none;
+}
+
+template <class Input>
+Problem check_input(const Input& u, const FilterOptions& opts) {
+  if constexpr (std::is_same_v<Input, NoInput>) {
+    return Problem::none;
+  } else if constexpr (std::is_arithmetic_v<Input>) {
+    if (!std::isfinite(static_cast<double>(u))) return Problem::non_finite_input;
+    if (std::abs(static_cast<double>(u)) > opts.max_abs_input) return Problem::input_magnitude;
+    return Problem::none;
+  } else if constexpr (std::is_base_of_v<Eigen::DenseBase<Input>, Input>) {
+    if (!u.allFinite()) return Problem::non_finite_input;
+    if (u.size() > 0 && u.cwiseAbs().maxCoeff() > opts.max_abs_input) return Problem::input_magnitude;
+    return Problem::none;
+  } else {
+    static_assert(requires { { u.is_finite() } -> std::convertible_to<bool>; },
+                  "a process input type must be NoInput, arithmetic, an Eigen type, or provide "
+                  "bool is_finite() const (and optionally double max_abs() const)");
+    if (!u.is_finite()) return Problem::non_finite_input;
+    if constexpr (requires { { u.max_abs() } -> std::convertible_to<double>; }) {
+      if (u.max_abs() > opts.max_abs_input) return Problem::input_magnitude;
+    }
+    return Problem::none;
+  }
+}
+
+/// Process noise must be finite with non-negative variances. A full semi-definiteness test
+/// would cost a factorisation per prediction; the propagated covariance is checked instead.
+template <class Derived>
+Problem check_process_noise(const Eigen::MatrixBase<Derived>& Q) {
+  if (!Q.allFinite()) return Problem::process_noise_non_finite;
+  if ((Q.diagonal().array() < 0.0).any()) return Problem::process_noise_negative_variance;
+  return Problem::none;
+}
+
+template <int M>
+Problem check_measurement(const Vector<M>& z, const SquareMatrix<M>& R, const FilterOptions& opts) {
+  if (!z.allFinite()) return Problem::non_finite_measurement;
+  if (z.cwiseAbs().maxCoeff() > opts.max_abs_measurement) return Problem::measurement_magnitude;
+  if (!R.allFinite()) return Problem::measurement_noise_non_finite;
+  if (!is_positive_definite(R)) return Problem::measurement_noise_not_positive_definite;
+  return Problem::none;
+}
+
+}  // namespace ctxfuse

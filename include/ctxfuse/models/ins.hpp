@@ -1,0 +1,181 @@
+// Strapdown inertial navigation as an error-state process model (15 states), and the GNSS
+// position measurement with a lever arm.
+//
+// Frames: a local-level navigation frame n (any right-handed one; gravity is a parameter, so
+// ENU uses (0, 0, -g) and NED (0, 0, +g)) and the body frame b of the IMU. Simplified
+// mechanisation as in the smartphone paper: no earth rotation, no transport rate, no coning or
+// sculling corrections -- right for low-cost IMUs over short baselines.
+//
+// Error state (local attitude error, true = nominal [+] error):
+//   p_true = p + dp, v_true = v + dv, q_true = q * Exp(dtheta), bg_true = bg + dbg, ...
+#pragma once
+
+#include <cmath>
+#include <limits>
+
+#include "ctxfuse/core/layout.hpp"
+#include "ctxfuse/core/so3.hpp"
+#include "ctxfuse/core/status.hpp"
+#include "ctxfuse/core/types.hpp"
+
+namespace ctxfuse::models {
+
+/// One IMU sample: angular rate [rad/s] and specific force [m/s^2], both in the body frame.
+struct ImuSample {
+  Eigen::Vector3d gyro = Eigen::Vector3d::Zero();
+  Eigen::Vector3d accel = Eigen::Vector3d::Zero();
+  bool is_finite() const { return gyro.allFinite() && accel.allFinite(); }
+  double max_abs() const { return std::max(gyro.cwiseAbs().maxCoeff(), accel.cwiseAbs().maxCoeff()); }
+};
+
+struct InsState {
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond q = Eigen::Quaterniond::Identity();  // body -> navigation
+  Eigen::Vector3d bg = Eigen::Vector3d::Zero();
+  Eigen::Vector3d ba = Eigen::Vector3d::Zero();
+};
+
+using Ins15Layout = Layout<Block<"p", 3>, Block<"v", 3>, Block<"theta", 3>, Block<"bg", 3>, Block<"ba", 3>>;
+
+/// First-order Gauss-Markov bias: b+ = exp(-dt/tau) b + w, with driving-noise density sigma
+/// [unit/s/sqrt(Hz)... i.e. unit/sqrt(s)]; tau = infinity is a random walk.
+struct GaussMarkov {
+  double density = 0.0;
+  double tau = std::numeric_limits<double>::infinity();
+
+  double decay(double dt) const { return std::isfinite(tau) ? std::exp(-dt / tau) : 1.0; }
+  double variance(double dt) const {
+    if (!std::isfinite(tau)) return density * density * dt;
+    return density * density * tau / 2.0 * (1.0 - std::exp(-2.0 * dt / tau));
+  }
+};
+
+struct Ins15Model {
+  using ErrorLayout = Ins15Layout;
+  using State = InsState;
+  using Input = ImuSample;
+  static constexpr int dim = ErrorLayout::size;
+
+  Eigen::Vector3d gravity{0.0, 0.0, -9.80665};  // ENU by default
+  double gyro_noise_density = 1e-3;             // [rad/s/sqrt(Hz)] angle random walk
+  double accel_noise_density = 1e-2;            // [m/s^2/sqrt(Hz)] velocity random walk
+  GaussMarkov gyro_bias{1e-5};
+  GaussMarkov accel_bias{1e-4};
+  // Rates above these are not a vehicle; they are a broken sample.
+  double max_gyro = 35.0;    // [rad/s] (2000 deg/s)
+  double max_accel = 400.0;  // [m/s^2] (~40 g)
+
+  Problem check_input(const ImuSample& u) const {
+    if (u.gyro.cwiseAbs().maxCoeff() > max_gyro || u.accel.cwiseAbs().maxCoeff() > max_accel)
+      return Problem::input_magnitude;
+    return Problem::none;
+  }
+
+  State predict(const State& x, const Input& u, double dt, SquareMatrix<dim>* F) const {
+    using L = ErrorLayout;
+    const Eigen::Vector3d w = u.gyro - x.bg;
+    const Eigen::Vector3d a = u.accel - x.ba;
+    const Eigen::Matrix3d R = x.q.toRotationMatrix();
+    const Eigen::Vector3d acc_n = R * a + gravity;
+
+    State out;
+    out.p = x.p + x.v * dt + 0.5 * acc_n * dt * dt;
+    out.v = x.v + acc_n * dt;
+    const Eigen::Vector3d wdt = w * dt;
+    out.q = (x.q * so3::exp_quat(wdt)).normalized();
+    const double kg = gyro_bias.decay(dt), ka = accel_bias.decay(dt);
+    out.bg = kg * x.bg;
+    out.ba = ka * x.ba;
+
+    if (F) {
+      F->setIdentity();
+      const Eigen::Matrix3d R_ax = R * so3::skew(a);
+      L::cov<"p", "v">(*F).diagonal().setConstant(dt);
+      L::cov<"p", "theta">(*F) = -0.5 * dt * dt * R_ax;
+      L::cov<"p", "ba">(*F) = -0.5 * dt * dt * R;
+      L::cov<"v", "theta">(*F) = -dt * R_ax;
+      L::cov<"v", "ba">(*F) = -dt * R;
+      L::cov<"theta", "theta">(*F) = so3::exp(wdt).transpose();
+      L::cov<"theta", "bg">(*F) = -dt * so3::right_jacobian(wdt);
+      L::cov<"bg", "bg">(*F).diagonal().setConstant(kg);
+      L::cov<"ba", "ba">(*F).diagonal().setConstant(ka);
+    }
+    return out;
+  }
+
+  SquareMatrix<dim> noise(const State&, const Input&, double dt) const {
+    using L = ErrorLayout;
+    SquareMatrix<dim> Q = SquareMatrix<dim>::Zero();
+    // White specific-force noise enters v directly and p through the half-step; isotropic
+    // noise is unchanged by the rotation to the navigation frame.
+    const double qa = accel_noise_density * accel_noise_density;
+    L::cov<"p">(Q).diagonal().setConstant(qa * dt * dt * dt / 3.0);
+    L::cov<"p", "v">(Q).diagonal().setConstant(qa * dt * dt / 2.0);
+    L::cov<"v", "p">(Q).diagonal().setConstant(qa * dt * dt / 2.0);
+    L::cov<"v">(Q).diagonal().setConstant(qa * dt);
+    L::cov<"theta">(Q).diagonal().setConstant(gyro_noise_density * gyro_noise_density * dt);
+    L::cov<"bg">(Q).diagonal().setConstant(gyro_bias.variance(dt));
+    L::cov<"ba">(Q).diagonal().setConstant(accel_bias.variance(dt));
+    return Q;
+  }
+
+  State inject(const State& x, const Vector<dim>& dx) const {
+    using L = ErrorLayout;
+    State out;
+    out.p = x.p + L::get<"p">(dx);
+    out.v = x.v + L::get<"v">(dx);
+    out.q = (x.q * so3::exp_quat(L::get<"theta">(dx))).normalized();
+    out.bg = x.bg + L::get<"bg">(dx);
+    out.ba = x.ba + L::get<"ba">(dx);
+    return out;
+  }
+
+  Vector<dim> difference(const State& a, const State& b) const {
+    using L = ErrorLayout;
+    Vector<dim> d;
+    L::get<"p">(d) = a.p - b.p;
+    L::get<"v">(d) = a.v - b.v;
+    L::get<"theta">(d) = so3::log(Eigen::Quaterniond(b.q.conjugate() * a.q));
+    L::get<"bg">(d) = a.bg - b.bg;
+    L::get<"ba">(d) = a.ba - b.ba;
+    return d;
+  }
+
+  /// After injecting dx, an error e about the old nominal is e' = Jr(dtheta) e about the new
+  /// one in the attitude block (Exp(dtheta + e) = Exp(dtheta) Exp(Jr e)); identity elsewhere.
+  /// The usual I - [dtheta/2]x is the first-order truncation of Jr.
+  SquareMatrix<dim> reset_jacobian(const State&, const Vector<dim>& dx) const {
+    using L = ErrorLayout;
+    SquareMatrix<dim> G = SquareMatrix<dim>::Identity();
+    L::cov<"theta">(G) = so3::right_jacobian(Eigen::Vector3d(L::get<"theta">(dx)));
+    return G;
+  }
+
+  bool is_finite(const State& x) const {
+    return x.p.allFinite() && x.v.allFinite() && x.q.coeffs().allFinite() && x.bg.allFinite() && x.ba.allFinite();
+  }
+};
+
+/// GNSS antenna position: z = p + R(q) l_b, with l_b the lever arm from IMU to antenna in the
+/// body frame. Works with any error layout that has blocks "p" and "theta" (15- or 20-state).
+template <class ErrorLayout = Ins15Layout>
+struct GnssPosition {
+  static constexpr int dim = 3;
+  Eigen::Vector3d lever_arm = Eigen::Vector3d::Zero();
+  SquareMatrix<3> R = SquareMatrix<3>::Identity();
+
+  Vector<3> predict(const InsState& x, Matrix<3, ErrorLayout::size>* H) const {
+    const Eigen::Matrix3d C = x.q.toRotationMatrix();
+    if (H) {
+      H->setZero();
+      ErrorLayout::template cols<"p">(*H).setIdentity();
+      // d(C Exp(e) l)/de = -C [l]x
+      ErrorLayout::template cols<"theta">(*H) = -C * so3::skew(lever_arm);
+    }
+    return x.p + C * lever_arm;
+  }
+  SquareMatrix<3> noise(const InsState&) const { return R; }
+};
+
+}  // namespace ctxfuse::models
