@@ -1,6 +1,7 @@
 // Umbrella header: the engine core, filters, policies and models.
 #pragma once
 
+#include "ctxfuse/core/block_sparsity.hpp"
 #include "ctxfuse/core/concepts.hpp"
 #include "ctxfuse/core/gaussian.hpp"
 #include "ctxfuse/core/layout.hpp"

@@ -69,15 +69,16 @@ TEST(Numerics, InnovationSolveGivesNisAndGaussianLogLikelihood) {
   EXPECT_TRUE(is_positive_definite(S));
 }
 
-TEST(Numerics, SymmetrizeAveragesOffDiagonalPairs) {
+TEST(Numerics, SymmetrizeMirrorsTheLowerTriangle) {
   SquareMatrix<3> P;
   P << 1, 2, 3, 4, 5, 6, 7, 8, 9;
   symmetrize(P);
-  EXPECT_EQ(P(0, 1), 3.0);
-  EXPECT_EQ(P(1, 0), 3.0);
-  EXPECT_EQ(P(2, 0), 5.0);
-  EXPECT_EQ(P(1, 2), 7.0);
+  EXPECT_EQ(P(0, 1), 4.0);
+  EXPECT_EQ(P(1, 0), 4.0);
+  EXPECT_EQ(P(0, 2), 7.0);
+  EXPECT_EQ(P(1, 2), 8.0);
   EXPECT_EQ(P.diagonal(), Vector<3>(1, 5, 9));
+  EXPECT_EQ(P, P.transpose());
 }
 
 }  // namespace

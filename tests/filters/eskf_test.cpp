@@ -119,7 +119,9 @@ TEST(Eskf, StaticLevelImuWithPositionFixesStaysPutAndShrinksPositionVariance) {
   u.accel = -m.gravity;  // at rest, level: specific force opposes gravity
   for (int k = 0; k < 500; ++k) {
     ASSERT_TRUE(f.predict(u, 0.01));
-    if (k % 100 == 99) ASSERT_TRUE(f.update(gnss, Vector<3>::Zero()));
+    if (k % 100 == 99) {
+      ASSERT_TRUE(f.update(gnss, Vector<3>::Zero()));
+    }
   }
   EXPECT_LT(f.nominal().p.norm(), 1e-9);
   EXPECT_LT(f.nominal().v.norm(), 1e-9);

@@ -11,15 +11,19 @@
 
 namespace ctxfuse {
 
+/// True when no element is NaN or Inf. x * 0 is 0 for finite x and NaN otherwise, so one
+/// vectorised multiply-add pass decides; Eigen's allFinite() is not vectorised.
+template <class Derived>
+bool all_finite(const Eigen::DenseBase<Derived>& m) {
+  return (m.derived().array() * typename Derived::Scalar(0)).sum() == typename Derived::Scalar(0);
+}
+
+/// Makes P exactly symmetric by mirroring its lower triangle onto the upper one. The two
+/// triangles of a covariance computed by the filters differ only by rounding, so averaging
+/// them would buy nothing and cost three times as much (strided reads of both triangles).
 template <class Derived>
 void symmetrize(Eigen::MatrixBase<Derived>& P) {
-  // In place, element pairs only, so that no aliasing temporary is needed.
-  for (Eigen::Index j = 0; j < P.cols(); ++j)
-    for (Eigen::Index i = j + 1; i < P.rows(); ++i) {
-      const auto m = 0.5 * (P(i, j) + P(j, i));
-      P(i, j) = m;
-      P(j, i) = m;
-    }
+  P.template triangularView<Eigen::StrictlyUpper>() = P.transpose();
 }
 
 /// Joseph form P+ = (I - K H) P (I - K H)' + K R K'. Symmetric and positive semi-definite for
@@ -32,6 +36,27 @@ SquareMatrix<N> joseph_update(const SquareMatrix<N>& P, const Matrix<N, M>& K, c
   SquareMatrix<N> out = I_KH * P * I_KH.transpose();
   out.noalias() += K * R * K.transpose();
   symmetrize(out);
+  return out;
+}
+
+/// The Joseph form expanded: with S = H P H' + R and PHt = P H',
+///   (I - K H) P (I - K H)' + K R K' = P - K PHt' - PHt K' + K S K'
+/// holds exactly for ANY gain K, so this keeps the Joseph form's first-order insensitivity to
+/// gain errors while costing O(N^2 M) instead of the O(N^3) of multiplying out (I - K H).
+/// (What it does not keep is the congruence structure, which guarantees semi-definiteness
+/// under rounding; joseph_update above keeps it, at N^3.)
+/// The result is symmetric up to rounding; callers symmetrise once, after any reset.
+template <int N, int M>
+SquareMatrix<N> joseph_update_expanded(const SquareMatrix<N>& P, const Matrix<N, M>& K, const Matrix<N, M>& PHt,
+                                       const SquareMatrix<M>& S) {
+  // Rank-M outer products: coefficient-based (lazy) products beat Eigen's blocked GEMM path
+  // by a wide margin at these sizes, and allocate nothing either way.
+  const SquareMatrix<N> K_PHt = K.lazyProduct(PHt.transpose());
+  const Matrix<N, M> KS = K * S;
+  SquareMatrix<N> out = P;
+  out -= K_PHt;
+  out -= K_PHt.transpose();
+  out += KS.lazyProduct(K.transpose());
   return out;
 }
 
@@ -53,7 +78,14 @@ struct InnovationSolve {
 
   /// y' S^-1 y
   double nis(const Vector<M>& y) const { return y.dot(llt.solve(y)); }
-  double log_det() const { return 2.0 * llt.matrixLLT().diagonal().array().log().sum(); }
+  double log_det() const {
+    // One logarithm of the product of the pivots; the sum of logs only when the product
+    // leaves the double range (it cannot for innovation covariances of sane units).
+    const auto d = llt.matrixLLT().diagonal();
+    const double prod = d.prod();
+    if (prod > 1e-150 && prod < 1e150) return 2.0 * std::log(prod);
+    return 2.0 * d.array().log().sum();
+  }
   /// log N(y; 0, S)
   double log_likelihood(double nis_value) const {
     return -0.5 * (nis_value + log_det() + M * std::log(2.0 * std::numbers::pi));

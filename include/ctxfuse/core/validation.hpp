@@ -37,7 +37,7 @@ Problem check_input(const Input& u, const FilterOptions& opts) {
     if (std::abs(static_cast<double>(u)) > opts.max_abs_input) return Problem::input_magnitude;
     return Problem::none;
   } else if constexpr (std::is_base_of_v<Eigen::DenseBase<Input>, Input>) {
-    if (!u.allFinite()) return Problem::non_finite_input;
+    if (!all_finite(u)) return Problem::non_finite_input;
     if (u.size() > 0 && u.cwiseAbs().maxCoeff() > opts.max_abs_input) return Problem::input_magnitude;
     return Problem::none;
   } else {
@@ -52,20 +52,28 @@ Problem check_input(const Input& u, const FilterOptions& opts) {
   }
 }
 
-/// Process noise must be finite with non-negative variances. A full semi-definiteness test
-/// would cost a factorisation per prediction; the propagated covariance is checked instead.
+/// Process noise must have non-negative variances. A full semi-definiteness test would cost a
+/// factorisation per prediction; the propagated covariance is checked instead. NaN or Inf in
+/// Q (or F) always reaches F P F' + Q, so the filters test that sum once and call
+/// diagnose_non_finite_prediction only on the failure path, to name the culprit.
 template <class Derived>
 Problem check_process_noise(const Eigen::MatrixBase<Derived>& Q) {
-  if (!Q.allFinite()) return Problem::process_noise_non_finite;
   if ((Q.diagonal().array() < 0.0).any()) return Problem::process_noise_negative_variance;
   return Problem::none;
 }
 
+template <class DerivedQ, class DerivedF>
+Problem diagnose_non_finite_prediction(const Eigen::MatrixBase<DerivedQ>& Q, const Eigen::MatrixBase<DerivedF>& F) {
+  if (!all_finite(Q)) return Problem::process_noise_non_finite;
+  if (!all_finite(F)) return Problem::non_finite_prediction;
+  return Problem::non_finite_covariance;
+}
+
 template <int M>
 Problem check_measurement(const Vector<M>& z, const SquareMatrix<M>& R, const FilterOptions& opts) {
-  if (!z.allFinite()) return Problem::non_finite_measurement;
+  if (!all_finite(z)) return Problem::non_finite_measurement;
   if (z.cwiseAbs().maxCoeff() > opts.max_abs_measurement) return Problem::measurement_magnitude;
-  if (!R.allFinite()) return Problem::measurement_noise_non_finite;
+  if (!all_finite(R)) return Problem::measurement_noise_non_finite;
   if (!is_positive_definite(R)) return Problem::measurement_noise_not_positive_definite;
   return Problem::none;
 }

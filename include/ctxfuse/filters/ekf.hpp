@@ -31,11 +31,14 @@ Status predict(const Model& model, Gaussian<Model::dim>& belief, const typename 
 
   SquareMatrix<N> F;
   const Vector<N> x = model.predict(belief.mean, u, dt, &F);
-  if (!x.allFinite() || !F.allFinite()) return Status::failure(Problem::non_finite_prediction);
-  SquareMatrix<N> P = F * belief.cov * F.transpose();
+  if (!all_finite(x)) return Status::failure(Problem::non_finite_prediction);
+  SquareMatrix<N> P = ctxfuse::detail::propagate_covariance<Model>(F, belief.cov);
   P += Q;
+  if (!all_finite(P)) {
+    const Problem p = diagnose_non_finite_prediction(Q, F);
+    return p == Problem::process_noise_non_finite ? Status::invalid(p) : Status::failure(p);
+  }
   symmetrize(P);
-  if (!P.allFinite()) return Status::failure(Problem::non_finite_covariance);
 
   belief.mean = x;
   belief.cov = P;
@@ -59,8 +62,9 @@ Status update(const Meas& meas, Gaussian<N>& belief, const Vector<Meas::dim>& z,
 
   Vector<N> dx;
   SquareMatrix<N> P;
-  Status status = detail::kalman_correction<N, M>(belief.cov, H, y, R, gate, dx, P);
+  Status status = detail::kalman_correction<Meas, N, M>(belief.cov, H, y, R, gate, dx, P);
   if (!status.accepted()) return status;
+  if (!detail::finish_covariance(P)) return Status::failure(Problem::non_finite_covariance);
   belief.mean += dx;
   belief.cov = P;
   return status;

@@ -25,7 +25,7 @@ bool nominal_is_finite(const Model& model, const typename Model::State& x) {
   if constexpr (requires { { model.is_finite(x) } -> std::convertible_to<bool>; })
     return model.is_finite(x);
   else
-    return model.difference(x, x).allFinite();
+    return all_finite(model.difference(x, x));
 }
 }  // namespace detail
 
@@ -43,11 +43,14 @@ Status predict(const Model& model, Belief<Model>& belief, const typename Model::
 
   SquareMatrix<N> F;
   typename Model::State x = model.predict(belief.nominal, u, dt, &F);
-  if (!F.allFinite() || !detail::nominal_is_finite(model, x)) return Status::failure(Problem::non_finite_prediction);
-  SquareMatrix<N> P = F * belief.cov * F.transpose();
+  if (!detail::nominal_is_finite(model, x)) return Status::failure(Problem::non_finite_prediction);
+  SquareMatrix<N> P = ctxfuse::detail::propagate_covariance<Model>(F, belief.cov);
   P += Q;
+  if (!all_finite(P)) {
+    const Problem p = diagnose_non_finite_prediction(Q, F);
+    return p == Problem::process_noise_non_finite ? Status::invalid(p) : Status::failure(p);
+  }
   symmetrize(P);
-  if (!P.allFinite()) return Status::failure(Problem::non_finite_covariance);
 
   belief.nominal = std::move(x);
   belief.cov = P;
@@ -72,17 +75,16 @@ Status update(const Model& model, const Meas& meas, Belief<Model>& belief, const
 
   Vector<N> dx;
   SquareMatrix<N> P;
-  Status status = ctxfuse::detail::kalman_correction<N, M>(belief.cov, H, y, R, gate, dx, P);
+  Status status = ctxfuse::detail::kalman_correction<Meas, N, M>(belief.cov, H, y, R, gate, dx, P);
   if (!status.accepted()) return status;
 
   typename Model::State x = model.inject(belief.nominal, dx);
   if (!detail::nominal_is_finite(model, x)) return Status::failure(Problem::non_finite_state);
   if constexpr (requires { { model.reset_jacobian(belief.nominal, dx) } -> std::convertible_to<SquareMatrix<N>>; }) {
     const SquareMatrix<N> G = model.reset_jacobian(belief.nominal, dx);
-    P = G * P * G.transpose();
-    symmetrize(P);
-    if (!P.allFinite()) return Status::failure(Problem::non_finite_covariance);
+    P = ctxfuse::detail::reset_covariance<Model>(G, P);
   }
+  if (!ctxfuse::detail::finish_covariance(P)) return Status::failure(Problem::non_finite_covariance);
   belief.nominal = std::move(x);
   belief.cov = P;
   if (dx_applied) *dx_applied = dx;

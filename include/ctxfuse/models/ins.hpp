@@ -13,7 +13,9 @@
 #include <cmath>
 #include <limits>
 
+#include "ctxfuse/core/block_sparsity.hpp"
 #include "ctxfuse/core/layout.hpp"
+#include "ctxfuse/core/numerics.hpp"
 #include "ctxfuse/core/so3.hpp"
 #include "ctxfuse/core/status.hpp"
 #include "ctxfuse/core/types.hpp"
@@ -24,7 +26,7 @@ namespace ctxfuse::models {
 struct ImuSample {
   Eigen::Vector3d gyro = Eigen::Vector3d::Zero();
   Eigen::Vector3d accel = Eigen::Vector3d::Zero();
-  bool is_finite() const { return gyro.allFinite() && accel.allFinite(); }
+  bool is_finite() const { return all_finite(gyro) && all_finite(accel); }
   double max_abs() const { return std::max(gyro.cwiseAbs().maxCoeff(), accel.cwiseAbs().maxCoeff()); }
 };
 
@@ -56,6 +58,18 @@ struct Ins15Model {
   using State = InsState;
   using Input = ImuSample;
   static constexpr int dim = ErrorLayout::size;
+
+  // Where F and the reset Jacobian G can be non-zero (see core/block_sparsity.hpp).
+  static constexpr auto transition_blocks = block_pattern<ErrorLayout>({
+      {"p", "p", kIdentity}, {"p", "v", kDiagonal}, {"p", "theta"}, {"p", "ba"},
+      {"v", "v", kIdentity}, {"v", "theta"}, {"v", "ba"},
+      {"theta", "theta"}, {"theta", "bg"},
+      {"bg", "bg", kDiagonal},
+      {"ba", "ba", kDiagonal},
+  });
+  static constexpr auto reset_blocks = block_pattern<ErrorLayout>({
+      {"p", "p", kIdentity}, {"v", "v", kIdentity}, {"theta", "theta"}, {"bg", "bg", kIdentity}, {"ba", "ba", kIdentity},
+  });
 
   Eigen::Vector3d gravity{0.0, 0.0, -9.80665};  // ENU by default
   double gyro_noise_density = 1e-3;             // [rad/s/sqrt(Hz)] angle random walk
@@ -153,7 +167,7 @@ struct Ins15Model {
   }
 
   bool is_finite(const State& x) const {
-    return x.p.allFinite() && x.v.allFinite() && x.q.coeffs().allFinite() && x.bg.allFinite() && x.ba.allFinite();
+    return all_finite(x.p) && all_finite(x.v) && all_finite(x.q.coeffs()) && all_finite(x.bg) && all_finite(x.ba);
   }
 };
 
@@ -162,6 +176,7 @@ struct Ins15Model {
 template <class ErrorLayout = Ins15Layout>
 struct GnssPosition {
   static constexpr int dim = 3;
+  static constexpr auto jacobian_columns = column_pattern<ErrorLayout>({"p", "theta"});
   Eigen::Vector3d lever_arm = Eigen::Vector3d::Zero();
   SquareMatrix<3> R = SquareMatrix<3>::Identity();
 

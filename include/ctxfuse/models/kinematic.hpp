@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "ctxfuse/core/block_sparsity.hpp"
 #include "ctxfuse/core/layout.hpp"
 #include "ctxfuse/core/status.hpp"
 #include "ctxfuse/core/types.hpp"
@@ -46,6 +47,7 @@ struct ConstantVelocity {
 template <class L, FixedString Name>
 struct BlockObservation {
   static constexpr int dim = L::template size_of<Name>();
+  static constexpr auto jacobian_columns = column_pattern<L>({Name.view()});
   SquareMatrix<dim> R = SquareMatrix<dim>::Identity();
 
   Vector<dim> predict(const Vector<L::size>& x, Matrix<dim, L::size>* H) const {
@@ -62,6 +64,7 @@ struct BlockObservation {
 template <class L, int D = 3>
 struct RangeToPoint {
   static constexpr int dim = 1;
+  static constexpr auto jacobian_columns = column_pattern<L>({std::string_view("p")});
   Vector<D> anchor = Vector<D>::Zero();
   double sigma = 0.1;
 
