@@ -13,7 +13,13 @@
 
 #include "cli/json.hpp"
 
+namespace ctxfuse::sim {
+struct Drive;
+}
+
 namespace ctxfuse::cli {
+
+class Plotter;
 
 /// Arguments after the sub-command name, e.g. for `ctxfuse run region --data x` the
 /// command "run" receives {"region", "--data", "x"}.
@@ -29,6 +35,10 @@ struct Command {
 /// What every `ctxfuse demo` section receives.
 struct DemoContext {
   std::uint64_t seed = 1;
+  /// The simulated default drive (ctxfuse/sim/drive.hpp), shared by all sections.
+  const sim::Drive* drive = nullptr;
+  /// Non-null with `--plot DIR` (cli/plot.hpp): sections may add PNGs through it.
+  Plotter* plotter = nullptr;
 };
 
 /// One section of `ctxfuse demo`, keyed like the JSON document ("region_imm", "scene_gins",

@@ -1,0 +1,194 @@
+// Runs the built `ctxfuse` binary: exit codes and messages of demo / sim / run, and malformed
+// logs that must end in a clear message naming file, line and field (never a crash).
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+  int code = -1;
+  std::string output;  // stdout and stderr together
+};
+
+Result run(const std::string& args) {
+  const std::string cmd = std::string("\"") + CTXFUSE_CLI_PATH + "\" " + args + " 2>&1";
+  Result r;
+  FILE* pipe = popen(cmd.c_str(), "r");
+  if (!pipe) return r;
+  char buf[4096];
+  std::size_t n;
+  while ((n = fread(buf, 1, sizeof buf, pipe)) > 0) r.output.append(buf, n);
+  const int status = pclose(pipe);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+  return r;
+}
+
+fs::path scratch(const std::string& name) {
+  const auto p = fs::temp_directory_path() / ("ctxfuse_cli_test_" + name);
+  fs::remove_all(p);
+  return p;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// Replaces line `line` (1-based) of a file.
+void replace_line(const fs::path& p, int line, const std::string& text) {
+  std::istringstream in(slurp(p));
+  std::ostringstream out;
+  std::string l;
+  for (int i = 1; std::getline(in, l); ++i) out << (i == line ? text : l) << '\n';
+  std::ofstream(p) << out.str();
+}
+
+const fs::path& logs() {
+  static const fs::path dir = [] {
+    auto d = scratch("logs");
+    const auto r = run("sim --seed 4 --out \"" + d.string() + "\"");
+    EXPECT_EQ(r.code, 0) << r.output;
+    return d;
+  }();
+  return dir;
+}
+
+}  // namespace
+
+TEST(CliSim, WritesAllSevenLogs) {
+  const auto& d = logs();
+  for (const char* f : {"imu.csv", "gnss.csv", "sats.csv", "uwb.csv", "speed.csv", "mag.csv", "truth.csv"})
+    EXPECT_GT(fs::file_size(d / f), 100u) << f;
+  EXPECT_EQ(slurp(d / "imu.csv").substr(0, 8), "t,gyro_x");
+}
+
+TEST(CliSim, UsageErrors) {
+  auto r = run("sim --seed 1");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("--out DIR is required"), std::string::npos) << r.output;
+  r = run("sim --seed abc --out /tmp/x");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("--seed expects a non-negative integer, got 'abc'"), std::string::npos) << r.output;
+  r = run("sim --bogus 1");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("unknown option '--bogus'"), std::string::npos) << r.output;
+  r = run("sim --duration 5 --out /tmp/x");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("duration_s"), std::string::npos) << r.output;
+}
+
+TEST(CliRun, GnssBaselineScoresAgainstTruth) {
+  const auto out = scratch("run_out");
+  fs::create_directories(out);
+  const auto r = run("run gnss --data \"" + logs().string() + "\" --json \"" + (out / "r.json").string() + "\" --out \"" +
+                     (out / "traj.csv").string() + "\"");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("outdoor"), std::string::npos);
+  const auto json = slurp(out / "r.json");
+  EXPECT_NE(json.find("\"rmse_h_m\""), std::string::npos);
+  EXPECT_NE(json.find("\"transition\""), std::string::npos);
+  // One trajectory row per fix, and fixes exist only outside the garage.
+  const auto traj = slurp(out / "traj.csv");
+  EXPECT_EQ(traj.substr(0, 16), "t,east,north,up\n");
+  const auto gnss = slurp(logs() / "gnss.csv");
+  std::istringstream g(gnss);
+  std::string line;
+  std::getline(g, line);
+  int fixes = 0;
+  while (std::getline(g, line)) fixes += line.find(",1,") == line.find(',') ? 1 : 0;
+  int rows = -1;
+  std::istringstream t(traj);
+  while (std::getline(t, line)) ++rows;
+  EXPECT_EQ(rows, fixes);
+  EXPECT_GT(fixes, 100);
+}
+
+TEST(CliRun, UnknownPipelineListsTheAvailableOnes) {
+  const auto r = run("run nosuch --data /tmp");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("unknown pipeline 'nosuch'"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("available pipelines"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("gnss"), std::string::npos) << r.output;
+  EXPECT_EQ(run("run gnss").code, 2);
+}
+
+TEST(CliRun, MalformedLogsNameFileLineAndField) {
+  struct Case {
+    const char* file;
+    int line;
+    const char* text;
+    const char* expect;
+  } cases[] = {
+      {"imu.csv", 5, "0.04,0.1,abc,0,0,0,9.8", "imu.csv:5: field 'gyro_y': 'abc' is not a number"},
+      {"imu.csv", 7, "0.06,0.1,0,0,nan,0,9.8", "imu.csv:7: field 'accel_x': value 'nan' is not finite"},
+      {"imu.csv", 9, "0.001,0,0,0,0,0,9.8", "imu.csv:9: field 't'"},
+      {"gnss.csv", 3, "2,1,3", "gnss.csv:3: expected 11 fields, found 3"},
+      {"uwb.csv", 1, "time,anchor", "uwb.csv:1: header is 'time,anchor'"},
+      {"truth.csv", 4, "0.03,0,0,0,0,0,0,0,0,0,0,0,0,0,0,9.8,0,7,0,0", "truth.csv:4: field 'region': 7 is outside [0, 2]"},
+      {"sats.csv", 2, "", "sats.csv"},
+  };
+  for (const auto& c : cases) {
+    const auto dir = scratch(std::string("bad_") + c.file + std::to_string(c.line));
+    fs::copy(logs(), dir);
+    replace_line(dir / c.file, c.line, c.text);
+    const auto r = run("run gnss --data \"" + dir.string() + "\"");
+    EXPECT_EQ(r.code, 1) << c.file << ":\n" << r.output;
+    EXPECT_NE(r.output.find(c.expect), std::string::npos) << "expected '" << c.expect << "' in:\n" << r.output;
+    fs::remove_all(dir);
+  }
+  // A missing file and a binary file.
+  const auto dir = scratch("bad_missing");
+  fs::copy(logs(), dir);
+  fs::remove(dir / "speed.csv");
+  auto r = run("run gnss --data \"" + dir.string() + "\"");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("speed.csv: cannot open for reading"), std::string::npos) << r.output;
+  {
+    std::ofstream(dir / "speed.csv", std::ios::binary) << std::string("\x00\x01\xff\xfe garbage", 12);
+  }
+  r = run("run gnss --data \"" + dir.string() + "\"");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.output.find("speed.csv:1: header is"), std::string::npos) << r.output;
+  fs::remove_all(dir);
+}
+
+TEST(CliDemo, SummaryJsonAndSectionsNotBuilt) {
+  const auto out = scratch("demo");
+  fs::create_directories(out);
+  const auto r = run("demo --seed 2 --json \"" + (out / "demo.json").string() + "\"");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("Simulated drive (seed 2)"), std::string::npos) << r.output;
+  const auto json = slurp(out / "demo.json");
+  EXPECT_NE(json.find("\"drive\""), std::string::npos);
+  EXPECT_NE(json.find("\"region_shares\""), std::string::npos);
+  // Each paper's section either ran (its key in the JSON) or printed "not built" (and left
+  // nothing in the JSON): the two counts add up to the five sections.
+  int in_json = 0, not_built = 0;
+  for (const char* key : {"region_imm", "scene_gins", "nlos_uwb", "phone_gins", "latency_us"})
+    in_json += json.find(std::string("\"") + key + "\"") != std::string::npos ? 1 : 0;
+  for (auto pos = r.output.find(": not built\n"); pos != std::string::npos; pos = r.output.find(": not built\n", pos + 1)) ++not_built;
+  EXPECT_EQ(in_json + not_built, 5) << r.output;
+  EXPECT_EQ(run("demo --seed -3").code, 2);
+}
+
+TEST(CliDemo, PlotsArePngFilesOrAClearMessage) {
+  const auto dir = scratch("plots");
+  const auto r = run("demo --seed 1 --plot \"" + dir.string() + "\"");
+  ASSERT_EQ(r.code, 0) << r.output;
+  if (r.output.find("gnuplot not found") != std::string::npos) GTEST_SKIP() << "gnuplot is not installed";
+  for (const char* f : {"drive_trajectory.png", "gnss_error_cdf.png"}) {
+    ASSERT_TRUE(fs::exists(dir / f)) << f << "\n" << r.output;
+    EXPECT_EQ(slurp(dir / f).substr(1, 3), "PNG") << f;
+  }
+}
