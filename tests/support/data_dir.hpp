@@ -23,16 +23,18 @@ inline std::filesystem::path data_dir() {
 
 }  // namespace ctxfuse::test
 
-/// Declares `path` as data_dir()/relative; skips (or fails under CI=true) when it is absent.
-#define CTXFUSE_REQUIRE_DATA(path, relative)                                                  \
-  const std::filesystem::path path = ::ctxfuse::test::data_dir() / (relative);               \
+/// Declares `var` as data_dir()/relative; skips (or fails under CI=true) when it is absent.
+/// (The parameter must not be called `path`: it would also replace the `path` of
+/// std::filesystem::path inside the expansion.)
+#define CTXFUSE_REQUIRE_DATA(var, relative)                                                   \
+  const std::filesystem::path var = ::ctxfuse::test::data_dir() / (relative);                \
   do {                                                                                        \
-    if (!std::filesystem::exists(path)) {                                                     \
+    if (!std::filesystem::exists(var)) {                                                      \
       if (::ctxfuse::test::running_in_ci()) {                                                 \
-        FAIL() << "shared data missing under CI=true: " << path                              \
+        FAIL() << "shared data missing under CI=true: " << var                               \
                << " (set CTXFUSE_DATA_DIR to the shared/data folder)";                       \
       } else {                                                                                \
-        GTEST_SKIP() << "shared data not found: " << path                                    \
+        GTEST_SKIP() << "shared data not found: " << var                                     \
                      << " (set CTXFUSE_DATA_DIR to the shared/data folder to run this test)"; \
       }                                                                                       \
     }                                                                                         \
