@@ -1,15 +1,23 @@
+# Install rules and the CMake package for find_package(ctxfuse CONFIG). Included from the
+# top-level CMakeLists.txt after the ctxfuse target is defined (and after GNUInstallDirs,
+# which the target's install include directory depends on).
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
+set(ctxfuse_package_dir ${CMAKE_INSTALL_DATADIR}/ctxfuse/cmake)
+
 install(TARGETS ctxfuse EXPORT ctxfuseTargets)
-install(DIRECTORY include/ctxfuse DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
-install(EXPORT ctxfuseTargets NAMESPACE ctxfuse:: DESTINATION ${CMAKE_INSTALL_DATADIR}/ctxfuse/cmake)
-configure_package_config_file(cmake/ctxfuseConfig.cmake.in
-  ${CMAKE_CURRENT_BINARY_DIR}/ctxfuseConfig.cmake
-  INSTALL_DESTINATION ${CMAKE_INSTALL_DATADIR}/ctxfuse/cmake)
-# Header-only: any architecture may use the same install.
-write_basic_package_version_file(${CMAKE_CURRENT_BINARY_DIR}/ctxfuseConfigVersion.cmake
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/ctxfuse
+        DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
+        FILES_MATCHING PATTERN "*.hpp")
+install(EXPORT ctxfuseTargets NAMESPACE ctxfuse:: DESTINATION ${ctxfuse_package_dir})
+configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/ctxfuseConfig.cmake.in
+  ${PROJECT_BINARY_DIR}/ctxfuseConfig.cmake
+  INSTALL_DESTINATION ${ctxfuse_package_dir})
+# Header-only: one install serves every architecture. 0.x releases promise nothing across
+# minor versions, hence SameMinorVersion.
+write_basic_package_version_file(${PROJECT_BINARY_DIR}/ctxfuseConfigVersion.cmake
   COMPATIBILITY SameMinorVersion ARCH_INDEPENDENT)
-install(FILES ${CMAKE_CURRENT_BINARY_DIR}/ctxfuseConfig.cmake
-              ${CMAKE_CURRENT_BINARY_DIR}/ctxfuseConfigVersion.cmake
-        DESTINATION ${CMAKE_INSTALL_DATADIR}/ctxfuse/cmake)
+install(FILES ${PROJECT_BINARY_DIR}/ctxfuseConfig.cmake
+              ${PROJECT_BINARY_DIR}/ctxfuseConfigVersion.cmake
+        DESTINATION ${ctxfuse_package_dir})

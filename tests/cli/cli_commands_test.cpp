@@ -1,6 +1,7 @@
 // Runs the built `ctxfuse` binary: exit codes and messages of demo / sim / run, and malformed
 // logs that must end in a clear message naming file, line and field (never a crash).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <sys/wait.h>
 
@@ -32,8 +33,10 @@ Result run(const std::string& args) {
   return r;
 }
 
+// One folder per process: ctest runs test cases in parallel processes (and several build
+// trees may test at once), so a fixed name would let one test rewrite another's logs.
 fs::path scratch(const std::string& name) {
-  const auto p = fs::temp_directory_path() / ("ctxfuse_cli_test_" + name);
+  const auto p = fs::temp_directory_path() / ("ctxfuse_cli_test_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(p);
   return p;
 }
