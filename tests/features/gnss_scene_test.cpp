@@ -1,0 +1,144 @@
+// Scene features against hand-computed epochs.
+#include <gtest/gtest.h>
+
+#include <ctxfuse/features/gnss_scene.hpp>
+
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace {
+
+using namespace ctxfuse::features;
+using F = GnssSceneFeature;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+TEST(GnssScene, AzimuthVacancyHandlesWrapAndElevationMask) {
+  std::vector<double> scratch(8);
+  // 10-60 deg mask keeps azimuths 350, 20, 100, 200; 5 deg and 70 deg satellites ignored.
+  const std::vector<SatelliteObservation> sats{
+      {1, 30, 350, 40}, {2, 15, 20, 40}, {3, 45, 100, 40}, {4, 60, 200, 40}, {5, 5, 280, 40}, {6, 70, 290, 40}};
+  // gaps: 20->100 = 80, 100->200 = 100, 200->350 = 150, 350->20 (across 0) = 30
+  EXPECT_DOUBLE_EQ(azimuth_vacancy(sats, 10, 60, scratch), 150.0);
+  // Largest gap across north: satellites at 100 and 250 only -> 250->100 via 0 = 210.
+  const std::vector<SatelliteObservation> two{{1, 30, 250, 40}, {2, 30, 100, 40}};
+  EXPECT_DOUBLE_EQ(azimuth_vacancy(two, 10, 60, scratch), 210.0);
+  // Negative / over-360 azimuths are wrapped: -10 = 350, 370 = 10 -> gaps 20 and 340.
+  const std::vector<SatelliteObservation> wrapped{{1, 30, -10, 40}, {2, 30, 370, 40}};
+  EXPECT_NEAR(azimuth_vacancy(wrapped, 10, 60, scratch), 340.0, 1e-12);
+  // One or zero satellites in the mask: 360; untracked satellites (NaN C/N0) do not count.
+  const std::vector<SatelliteObservation> one{{1, 30, 100, 40}, {2, 30, 200, kNaN}};
+  EXPECT_DOUBLE_EQ(azimuth_vacancy(one, 10, 60, scratch), 360.0);
+}
+
+TEST(GnssScene, PdopOfKnownGeometry) {
+  // Zenith + three on the horizon 120 deg apart: G^T G = diag(1.5, 1.5, [[1, 1], [1, 4]]),
+  // so PDOP^2 = 1/1.5 + 1/1.5 + 4/3 = 8/3.
+  const std::vector<SatelliteObservation> sats{{1, 90, 0, 40}, {2, 0, 0, 40}, {3, 0, 120, 40}, {4, 0, 240, 40}};
+  EXPECT_NEAR(pdop_from_geometry(sats), std::sqrt(8.0 / 3.0), 1e-12);
+  // Three satellites: no solution.
+  EXPECT_TRUE(std::isnan(pdop_from_geometry(std::span(sats).first(3))));
+  // All at one point of the sky: singular.
+  const std::vector<SatelliteObservation> same{{1, 30, 10, 40}, {2, 30, 10, 40}, {3, 30, 10, 40}, {4, 30, 10, 40}};
+  EXPECT_TRUE(std::isnan(pdop_from_geometry(same)));
+}
+
+TEST(GnssScene, FeaturesOfHandComputedEpochs) {
+  GnssSceneExtractor<16, 8> ex;
+  GnssSceneFeatures f;
+  // t = 0: three tracked satellites + one untracked; receiver PDOP 2.0.
+  const std::vector<SatelliteObservation> e0{{1, 20, 10, 40}, {2, 40, 100, 44}, {3, 60, 300, 48}, {4, 50, 200, kNaN}};
+  ASSERT_EQ(ex.push({0.0, e0, 2.0}, f), GnssFeatureStatus::ok);
+  EXPECT_EQ(f[F::satellite_count], 3);
+  EXPECT_EQ(f[F::pdop], 2.0);
+  EXPECT_DOUBLE_EQ(f[F::mean_cn0], 44.0);
+  EXPECT_DOUBLE_EQ(f[F::mean_elevation], 40.0);
+  EXPECT_DOUBLE_EQ(f[F::count_std], 0.0);
+  EXPECT_DOUBLE_EQ(f[F::pdop_std], 0.0);
+  EXPECT_EQ(f[F::mean_cn0_std], -1.0);  // one epoch: no C/N0 history yet -> fill
+  // azimuths 10, 100, 300: gaps 90, 200, 70 (300 -> 10 across north)
+  EXPECT_DOUBLE_EQ(f[F::azimuth_vacancy], 200.0);
+
+  // t = 1: satellite 1 at 42, 2 at 44, new satellite 5; PDOP 3.0.
+  const std::vector<SatelliteObservation> e1{{1, 20, 10, 42}, {2, 40, 100, 44}, {5, 30, 190, 38}, {3, 60, 300, 50}};
+  ASSERT_EQ(ex.push({1.0, e1, 3.0}, f), GnssFeatureStatus::ok);
+  EXPECT_EQ(f[F::satellite_count], 4);
+  EXPECT_DOUBLE_EQ(f[F::mean_cn0], (42 + 44 + 38 + 50) / 4.0);
+  EXPECT_DOUBLE_EQ(f[F::count_std], 0.5);   // counts {3, 4}
+  EXPECT_DOUBLE_EQ(f[F::pdop_std], 0.5);    // pdops {2, 3}
+  // per-satellite C/N0 std over the two epochs: sat1 {40,42} -> 1, sat2 {44,44} -> 0,
+  // sat3 {48,50} -> 1, sat5 single value -> skipped; mean = 2/3
+  EXPECT_NEAR(f[F::mean_cn0_std], 2.0 / 3.0, 1e-12);
+
+  // t = 2, 3, 4: satellite 1 only (C/N0 44, 40, 40) -> sat1 history over the last 4 epochs:
+  // t=1..4: {42, 44, 40, 40}, mean 41.5, population std sqrt((0.25+6.25+2.25+2.25)/4)
+  const std::vector<SatelliteObservation> s44{{1, 20, 10, 44}}, s40{{1, 20, 10, 40}};
+  ASSERT_EQ(ex.push({2.0, s44}, f), GnssFeatureStatus::ok);
+  ASSERT_EQ(ex.push({3.0, s40}, f), GnssFeatureStatus::ok);
+  ASSERT_EQ(ex.push({4.0, s40}, f), GnssFeatureStatus::ok);
+  EXPECT_NEAR(f[F::mean_cn0_std], std::sqrt(11.0 / 4.0), 1e-12);
+  // Window (0, 4]: epochs t = 1..4 with counts {4, 1, 1, 1}: mean 1.75, std sqrt(27/16)
+  EXPECT_NEAR(f[F::count_std], std::sqrt((2.25 * 2.25 + 3 * 0.75 * 0.75) / 4.0), 1e-12);
+  EXPECT_EQ(f[F::pdop], -1.0);       // one satellite, no receiver PDOP -> fill
+  EXPECT_DOUBLE_EQ(f[F::pdop_std], 0.0);  // only t = 1 has a PDOP inside the window
+  EXPECT_DOUBLE_EQ(f[F::azimuth_vacancy], 360.0);
+}
+
+TEST(GnssScene, IndoorEpochFillsAndBadInputLeavesStateUnchanged) {
+  GnssSceneConfig cfg;
+  cfg.fill_value = -5.0;
+  GnssSceneExtractor<4, 8> ex(cfg);
+  GnssSceneFeatures f;
+  ASSERT_EQ(ex.push({0.0, {}}, f), GnssFeatureStatus::ok);
+  EXPECT_EQ(f[F::satellite_count], 0.0);
+  for (int k = 1; k < kGnssSceneFeatureCount; ++k) EXPECT_EQ(f[k], -5.0) << k;
+
+  const GnssSceneFeatures before = f;
+  const std::vector<SatelliteObservation> ok{{1, 20, 10, 40}};
+  EXPECT_EQ(ex.push({0.0, ok}, f), GnssFeatureStatus::time_not_increasing);
+  EXPECT_EQ(ex.push({kNaN, ok}, f), GnssFeatureStatus::non_finite_time);
+  const std::vector<SatelliteObservation> bad_el{{1, 95, 10, 40}}, bad_cn0{{1, 20, 10, -3}}, dup{{1, 20, 10, 40}, {1, 30, 50, 40}};
+  EXPECT_EQ(ex.push({1.0, bad_el}, f), GnssFeatureStatus::invalid_elevation);
+  EXPECT_EQ(ex.push({1.0, bad_cn0}, f), GnssFeatureStatus::invalid_cn0);
+  EXPECT_EQ(ex.push({1.0, dup}, f), GnssFeatureStatus::duplicate_satellite);
+  EXPECT_EQ(ex.push({1.0, ok, -2.0}, f), GnssFeatureStatus::invalid_pdop);
+  const std::vector<SatelliteObservation> five(5, SatelliteObservation{1, 20, 10, 40});
+  EXPECT_EQ(ex.push({1.0, five}, f), GnssFeatureStatus::too_many_satellites);
+  EXPECT_EQ(f, before);
+  // The rejected epochs left no trace: t = 1 is still accepted and its window holds {0, 1}.
+  ASSERT_EQ(ex.push({1.0, ok}, f), GnssFeatureStatus::ok);
+  EXPECT_DOUBLE_EQ(f[F::count_std], 0.5);
+}
+
+TEST(GnssScene, BatchMatchesStreamingAndNamesTheBadEpoch) {
+  const std::vector<SatelliteObservation> a{{1, 20, 10, 40}, {2, 40, 100, 44}}, b{{1, 20, 12, 41}};
+  const std::vector<GnssEpoch> epochs{{0.0, a}, {1.0, b}, {2.0, a}};
+  const auto batch = gnss_scene_features(std::span<const GnssEpoch>(epochs));
+  GnssSceneExtractor<> ex;
+  for (std::size_t i = 0; i < epochs.size(); ++i) {
+    GnssSceneFeatures f;
+    ASSERT_EQ(ex.push(epochs[i], f), GnssFeatureStatus::ok);
+    EXPECT_EQ(f, batch[i]);
+  }
+  const std::vector<GnssEpoch> backwards{{1.0, a}, {0.5, a}};
+  try {
+    gnss_scene_features(std::span<const GnssEpoch>(backwards));
+    FAIL() << "expected an error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("epoch 1"), std::string::npos) << e.what();
+  }
+}
+
+TEST(GnssScene, WindowDropsEpochsOlderThanFourSeconds) {
+  GnssSceneExtractor<4, 16> ex;
+  GnssSceneFeatures f;
+  const std::vector<SatelliteObservation> one{{1, 20, 10, 40}},
+      two{{1, 20, 10, 40}, {2, 20, 50, 40}};
+  ASSERT_EQ(ex.push({0.0, two}, f), GnssFeatureStatus::ok);
+  ASSERT_EQ(ex.push({1.0, one}, f), GnssFeatureStatus::ok);
+  EXPECT_DOUBLE_EQ(f[F::count_std], 0.5);
+  ASSERT_EQ(ex.push({4.5, one}, f), GnssFeatureStatus::ok);  // window (0.5, 4.5]: t = 1, 4.5
+  EXPECT_DOUBLE_EQ(f[F::count_std], 0.0);
+}
+
+}  // namespace

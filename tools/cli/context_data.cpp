@@ -1,0 +1,286 @@
+// `ctxfuse context joint`: the region paper's joint classifier (SVM + HMM, weighted vote,
+// eq. 18-28) on a time-ordered labelled feature CSV such as `features nmea` writes, with the
+// region transition matrix (eq. 36-37) of the joint labels.
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <vector>
+
+#include <ctxfuse/classify/hmm.hpp>
+#include <ctxfuse/classify/joint.hpp>
+#include <ctxfuse/classify/region_transition.hpp>
+#include <ctxfuse/classify/svm.hpp>
+#include <ctxfuse/classify/svm_train.hpp>
+#include <ctxfuse/eval/classification.hpp>
+
+#include "cli/registry.hpp"
+
+namespace {
+
+using ctxfuse::cli::Args;
+namespace cls = ctxfuse::classify;
+
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+constexpr std::string_view kHelp =
+    "usage: ctxfuse context joint --train CSV --test CSV [--validation-fraction F]\n"
+    "         [--kernel linear|rbf] [--C c] [--gamma g] [--covariance full|diagonal]\n"
+    "         [--decoder viterbi|filter]\n"
+    "  CSVs: header, integer `label` column with regions 0..N-1 (N = 2 or 3), 2 or 8 numeric\n"
+    "  feature columns, rows in time order (one sequence). The first 1-F of --train (default\n"
+    "  F = 0.25) fits an SVM and a Gaussian HMM; the last F is the validation set that gives the\n"
+    "  per-region accuracies P_S,k, P_H,k and so the vote weights w = P / (P_S + P_H). --test is\n"
+    "  then classified by the SVM, the HMM (Viterbi over the whole test sequence, or the online\n"
+    "  forward filter's most probable region) and the weighted vote; prints accuracy,\n"
+    "  precision/recall and confusion matrix of each, and the transition matrix of the joint\n"
+    "  labels (rows without transitions: identity).\n";
+
+struct Table {
+  std::vector<int> labels;
+  std::vector<std::vector<double>> rows;
+  int features = 0;
+};
+
+Table read_table(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot open '" + path + "'");
+  Table t;
+  std::string line;
+  std::size_t line_no = 0;
+  std::vector<std::string> names;
+  int label_col = -1;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty()) continue;
+    std::vector<std::string_view> f;
+    std::string_view rest(line);
+    while (true) {
+      const auto c = rest.find(',');
+      f.push_back(rest.substr(0, c));
+      if (c == std::string_view::npos) break;
+      rest.remove_prefix(c + 1);
+    }
+    if (names.empty()) {
+      for (std::size_t i = 0; i < f.size(); ++i) {
+        names.emplace_back(f[i]);
+        if (f[i] == "label") label_col = static_cast<int>(i);
+      }
+      if (label_col < 0) throw std::runtime_error(path + ":1: no 'label' column");
+      t.features = static_cast<int>(names.size()) - 1;
+      continue;
+    }
+    if (f.size() != names.size())
+      throw std::runtime_error(path + ":" + std::to_string(line_no) + ": " + std::to_string(f.size()) +
+                               " fields, header has " + std::to_string(names.size()));
+    std::vector<double> row;
+    for (std::size_t i = 0; i < f.size(); ++i) {
+      double v = 0;
+      const auto [p, ec] = std::from_chars(f[i].data(), f[i].data() + f[i].size(), v);
+      if (f[i].empty() || ec != std::errc{} || p != f[i].data() + f[i].size() || !std::isfinite(v))
+        throw std::runtime_error(path + ":" + std::to_string(line_no) + ": column '" + names[i] + "': '" +
+                                 std::string(f[i]) + "' is not a finite number");
+      if (static_cast<int>(i) == label_col) {
+        if (v != std::floor(v) || v < 0 || v > 2)
+          throw std::runtime_error(path + ":" + std::to_string(line_no) + ": label '" + std::string(f[i]) +
+                                   "' is not a region 0, 1 or 2");
+        t.labels.push_back(static_cast<int>(v));
+      } else {
+        row.push_back(v);
+      }
+    }
+    t.rows.push_back(std::move(row));
+  }
+  if (t.rows.empty()) throw std::runtime_error(path + ": no data rows");
+  return t;
+}
+
+std::string pct(double v) {
+  if (!std::isfinite(v)) return "   nan";
+  char b[16];
+  std::snprintf(b, sizeof b, "%6.2f", 100.0 * v);
+  return b;
+}
+
+void report(std::ostream& out, std::string_view name, std::span<const int> truth, std::span<const int> pred, int n) {
+  const auto m = ctxfuse::eval::ConfusionMatrix::from_labels(truth, pred, n);
+  out << name << ": accuracy " << pct(m.accuracy()) << " %\n  region  precision %  recall %  support\n";
+  for (int k = 0; k < n; ++k)
+    out << "  " << k << "       " << pct(m.precision(k)) << "     " << pct(m.recall(k)) << "   " << m.support(k) << '\n';
+  out << "  confusion (rows true, columns predicted):";
+  for (int t = 0; t < n; ++t) {
+    out << "\n   ";
+    for (int p = 0; p < n; ++p) out << ' ' << m.count(t, p);
+  }
+  out << '\n';
+}
+
+struct Settings {
+  double validation_fraction = 0.25;
+  cls::SvmTrainOptions svm;
+  cls::HmmFitOptions hmm;
+  bool viterbi = true;
+};
+
+template <int N, int D>
+int run_joint(const Table& train, const Table& test, const Settings& s, std::ostream& out) {
+  using Vec = Eigen::Matrix<double, D, 1>;
+  auto to_vecs = [](const Table& t, std::size_t b, std::size_t e) {
+    std::vector<Vec> v;
+    for (std::size_t i = b; i < e; ++i) v.push_back(Eigen::Map<const Vec>(t.rows[i].data()));
+    return v;
+  };
+  const std::size_t cut =
+      static_cast<std::size_t>(std::llround((1.0 - s.validation_fraction) * double(train.rows.size())));
+  if (cut < 4 || cut >= train.rows.size()) throw std::runtime_error("--validation-fraction leaves no fit or no validation rows");
+  const auto fit_x = to_vecs(train, 0, cut), val_x = to_vecs(train, cut, train.rows.size()),
+             test_x = to_vecs(test, 0, test.rows.size());
+  const std::span<const int> fit_y(train.labels.data(), cut), val_y(train.labels.data() + cut, train.rows.size() - cut);
+
+  cls::SvmFeatures<D> fx(static_cast<Eigen::Index>(fit_x.size()), D);
+  for (std::size_t i = 0; i < fit_x.size(); ++i) fx.row(static_cast<Eigen::Index>(i)) = fit_x[i].transpose();
+  const auto svm = cls::train_svm<D>(fx, fit_y, s.svm);
+  const cls::LabelledSequence<D> seq{fit_x, fit_y};
+  const auto hmm = cls::fit_supervised<N, D>(std::span<const cls::LabelledSequence<D>>(&seq, 1), s.hmm);
+
+  auto svm_labels = [&](const std::vector<Vec>& x) {
+    std::vector<int> y;
+    for (const auto& v : x) {
+      cls::SvmPrediction<8> p;
+      if (cls::svm_predict(svm, v, p) != cls::SvmStatus::ok) throw std::runtime_error("SVM prediction failed");
+      y.push_back(p.label);
+    }
+    return y;
+  };
+  auto hmm_labels = [&](const std::vector<Vec>& x) {
+    if (s.viterbi) return cls::viterbi<N, D>(hmm, x).path;
+    cls::HmmForwardFilter<N, D> filter(hmm);
+    std::vector<int> y;
+    for (const auto& v : x) {
+      filter.step(v);  // a rejected epoch keeps the previous posterior: its argmax is reused
+      y.push_back(filter.most_probable());
+    }
+    return y;
+  };
+
+  const auto val_svm = svm_labels(val_x), val_hmm = hmm_labels(val_x);
+  const auto p_svm = cls::per_region_accuracy<N>(val_y, val_svm), p_hmm = cls::per_region_accuracy<N>(val_y, val_hmm);
+  const auto vote = cls::WeightedVote<N, 2>::from_accuracies({p_svm, p_hmm});
+  out << "fit " << cut << " rows, validation " << val_y.size() << " rows, test " << test.rows.size() << " rows; "
+      << N << " regions, " << D << " features\n";
+  out << "validation accuracy per region (SVM / HMM) and weights w_s / w_h:\n";
+  for (int k = 0; k < N; ++k)
+    out << "  region " << k << " (" << std::count(val_y.begin(), val_y.end(), k) << " rows): " << pct(p_svm[k]) << " / "
+        << pct(p_hmm[k]) << " %   w " << vote.weights[0][k] << " / " << vote.weights[1][k] << '\n';
+
+  const auto t_svm = svm_labels(test_x), t_hmm = hmm_labels(test_x);
+  std::vector<int> t_joint(t_svm.size());
+  for (std::size_t i = 0; i < t_svm.size(); ++i) t_joint[i] = vote({t_svm[i], t_hmm[i]});
+  report(out, "SVM", test.labels, t_svm, N);
+  report(out, s.viterbi ? "HMM (Viterbi)" : "HMM (forward filter)", test.labels, t_hmm, N);
+  report(out, "joint vote", test.labels, t_joint, N);
+  const auto m = cls::region_transition_matrix<N>(t_joint);
+  out << "transition matrix of the joint labels (eq. 36-37):\n";
+  for (int i = 0; i < N; ++i) {
+    out << " ";
+    for (int j = 0; j < N; ++j) {
+      char b[16];
+      std::snprintf(b, sizeof b, " %.4f", m(i, j));
+      out << b;
+    }
+    out << '\n';
+  }
+  return 0;
+}
+
+int run_context(Args args, std::ostream& out, std::ostream& err) {
+  if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] != "joint") {
+    if (!args.empty() && args[0] != "--help" && args[0] != "-h")
+      err << "ctxfuse context: unknown sub-command '" << args[0] << "'\n";
+    (args.empty() || (args[0] != "--help" && args[0] != "-h") ? err : out) << kHelp;
+    return args.empty() || (args[0] != "--help" && args[0] != "-h") ? 2 : 0;
+  }
+  std::map<std::string, std::string> opt;
+  const std::vector<std::string_view> known{"--train", "--test", "--validation-fraction", "--kernel", "--C",
+                                            "--gamma", "--covariance", "--decoder"};
+  for (std::size_t i = 1; i < args.size(); i += 2) {
+    if (args[i] == "--help" || args[i] == "-h") return out << kHelp, 0;
+    if (std::find(known.begin(), known.end(), args[i]) == known.end() || i + 1 >= args.size()) {
+      err << "ctxfuse context joint: unknown option or missing value '" << args[i] << "'\n" << kHelp;
+      return 2;
+    }
+    opt[std::string(args[i])] = std::string(args[i + 1]);
+  }
+  auto number = [&](const std::string& k, double fallback) {
+    if (!opt.count(k)) return fallback;
+    double v = 0;
+    const auto& s = opt[k];
+    const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (ec != std::errc{} || p != s.data() + s.size() || !std::isfinite(v))
+      throw UsageError("option " + k + ": '" + s + "' is not a number");
+    return v;
+  };
+  try {
+    if (!opt.count("--train") || !opt.count("--test")) {
+      err << "ctxfuse context joint: --train and --test are required\n" << kHelp;
+      return 2;
+    }
+    Settings s;
+    s.validation_fraction = number("--validation-fraction", 0.25);
+    if (!(s.validation_fraction > 0.0 && s.validation_fraction < 1.0))
+      throw UsageError("--validation-fraction must be in (0, 1)");
+    s.svm.kernel = cls::SvmKernel::linear;
+    if (opt.count("--kernel")) {
+      if (opt["--kernel"] == "rbf")
+        s.svm.kernel = cls::SvmKernel::rbf;
+      else if (opt["--kernel"] != "linear")
+        throw UsageError("--kernel must be linear or rbf");
+    }
+    s.svm.C = number("--C", 1.0);
+    s.svm.gamma = number("--gamma", 0.0);
+    s.hmm.covariance = cls::CovarianceKind::diagonal;
+    if (opt.count("--covariance")) {
+      if (opt["--covariance"] == "full")
+        s.hmm.covariance = cls::CovarianceKind::full;
+      else if (opt["--covariance"] != "diagonal")
+        throw UsageError("--covariance must be full or diagonal");
+    }
+    if (opt.count("--decoder")) {
+      if (opt["--decoder"] == "filter")
+        s.viterbi = false;
+      else if (opt["--decoder"] != "viterbi")
+        throw UsageError("--decoder must be viterbi or filter");
+    }
+    const Table train = read_table(opt["--train"]), test = read_table(opt["--test"]);
+    if (train.features != test.features) throw std::runtime_error("--train and --test have different feature counts");
+    const int regions = 1 + std::max(*std::max_element(train.labels.begin(), train.labels.end()),
+                                     *std::max_element(test.labels.begin(), test.labels.end()));
+    const int n = std::max(regions, 2);
+    if (train.features == 8 && n == 2) return run_joint<2, 8>(train, test, s, out);
+    if (train.features == 8 && n == 3) return run_joint<3, 8>(train, test, s, out);
+    if (train.features == 2 && n == 2) return run_joint<2, 2>(train, test, s, out);
+    if (train.features == 2 && n == 3) return run_joint<3, 2>(train, test, s, out);
+    err << "ctxfuse context joint: " << train.features << " features are not supported (2 or 8)\n";
+    return 2;
+  } catch (const UsageError& e) {
+    err << "ctxfuse context joint: " << e.what() << '\n';
+    return 2;
+  } catch (const std::exception& e) {
+    err << "ctxfuse context joint: error: " << e.what() << '\n';
+    return 1;
+  }
+}
+
+const ctxfuse::cli::RegisterCommand reg{
+    {"context", "joint SVM + HMM region recognition on labelled feature sequences", run_context}};
+
+}  // namespace
