@@ -25,8 +25,14 @@ cmake --build --preset "$preset" -j "$jobs" --target ctxfuse_cli
 
 cli="$build_dir/tools/ctxfuse"
 if "$cli" --help 2>/dev/null | grep -Eq '^  demo( |$)'; then
-  echo "== $cli demo $*" >&2
-  exec "$cli" demo "$@"
+  args=("$@")
+  # The JSON document is part of the main job: written to out/demo.json unless asked elsewhere.
+  if [[ " $* " != *" --json "* ]]; then
+    mkdir -p "$repo/out"
+    args+=(--json "$repo/out/demo.json")
+  fi
+  echo "== $cli demo ${args[*]}" >&2
+  exec "$cli" demo "${args[@]}"
 fi
 
 echo "== '$cli' has no demo command yet; running the examples instead" >&2

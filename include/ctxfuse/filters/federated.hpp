@@ -1,0 +1,162 @@
+// Federated Kalman filter (Carlson 1990): L local EKFs over the same process model, each
+// correcting with its own sensor, and a master filter that fuses their estimates in
+// information form and resets them (fusion-reset mode):
+//   P_g = (sum_i P_i^-1)^-1,   x_g = P_g sum_i P_i^-1 x_i,
+//   then P_i = P_g / beta_i, x_i = x_g, with information-sharing factors beta_i > 0, sum 1.
+// The process noise of local filter i is Q / beta_i (its share of the common process
+// information), so that fusion does not count the common dynamics L times. A measurement
+// given to several local filters should likewise be given with R / beta_i each
+// (`shared_update`), or to one of them only.
+//
+// Angles: when the model defines difference()/inject() (e.g. the planar model wraps the
+// heading), fusion happens in differences around local filter 0's estimate,
+// x_g = x_0 [+] P_g sum_i P_i^-1 (x_i [-] x_0), which is the formula above for plain vectors.
+// Nothing allocates; fusion uses Cholesky solves, and a covariance that is not positive
+// definite fails the fusion (status, nothing changed).
+#pragma once
+
+#include <Eigen/Cholesky>
+
+#include <array>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "ctxfuse/core/concepts.hpp"
+#include "ctxfuse/core/gaussian.hpp"
+#include "ctxfuse/filters/ekf.hpp"
+#include "ctxfuse/policies/gating.hpp"
+
+namespace ctxfuse::fkf {
+
+namespace detail {
+template <class Model, int N>
+Vector<N> difference(const Model& m, const Vector<N>& a, const Vector<N>& b) {
+  if constexpr (requires { { m.difference(a, b) } -> std::convertible_to<Vector<N>>; })
+    return m.difference(a, b);
+  else
+    return a - b;
+}
+template <class Model, int N>
+Vector<N> inject(const Model& m, const Vector<N>& x, const Vector<N>& dx) {
+  if constexpr (requires { { m.inject(x, dx) } -> std::convertible_to<Vector<N>>; })
+    return m.inject(x, dx);
+  else
+    return x + dx;
+}
+
+/// Q / beta for the local filter's share of the process information.
+template <class Model>
+struct SharedProcess {
+  using State = typename Model::State;
+  using Input = typename Model::Input;
+  static constexpr int dim = Model::dim;
+  Model inner;
+  double beta = 1.0;
+
+  State predict(const State& x, const Input& u, double dt, SquareMatrix<dim>* F) const { return inner.predict(x, u, dt, F); }
+  SquareMatrix<dim> noise(const State& x, const Input& u, double dt) const { return inner.noise(x, u, dt) / beta; }
+  Problem check_input(const Input& u) const { return ctxfuse::detail::model_input_check(inner, u); }
+};
+}  // namespace detail
+
+/// Information-form fusion of L Gaussian estimates (Model only for the angle-aware
+/// difference/inject). Returns false, leaving `out` untouched, when a covariance is not
+/// positive definite.
+template <class Model, int N, std::size_t L>
+bool fuse(const Model& model, const std::array<Gaussian<N>, L>& locals, Gaussian<N>& out) {
+  static_assert(L >= 1);
+  SquareMatrix<N> info = SquareMatrix<N>::Zero();
+  Vector<N> info_state = Vector<N>::Zero();
+  const Vector<N>& ref = locals[0].mean;
+  for (const auto& b : locals) {
+    Eigen::LLT<SquareMatrix<N>> llt(b.cov);
+    if (llt.info() != Eigen::Success) return false;
+    const SquareMatrix<N> Pinv = llt.solve(SquareMatrix<N>::Identity());
+    info += Pinv;
+    info_state += Pinv * detail::difference(model, b.mean, ref);
+  }
+  symmetrize(info);
+  Eigen::LLT<SquareMatrix<N>> llt(info);
+  if (llt.info() != Eigen::Success) return false;
+  SquareMatrix<N> Pg = llt.solve(SquareMatrix<N>::Identity());
+  symmetrize(Pg);
+  const Vector<N> dx = llt.solve(info_state);
+  if (!Pg.allFinite() || !dx.allFinite()) return false;
+  out.mean = detail::inject(model, ref, dx);
+  out.cov = Pg;
+  return true;
+}
+
+/// L local EKFs and the master fusion with reset.
+template <VectorProcessModel Model, int L, GatePolicy Gate = NoGate>
+class FederatedFilter {
+ public:
+  static constexpr int N = Model::dim;
+  using Input = typename Model::Input;
+  using Belief = Gaussian<N>;
+
+  FederatedFilter(Model model, const Belief& initial, const std::array<double, L>& beta, FilterOptions options = {},
+                  Gate gate = {})
+      : model_(std::move(model)), beta_(beta), options_(options), gate_(std::move(gate)) {
+    double s = 0.0;
+    for (int i = 0; i < L; ++i) {
+      if (!(beta[static_cast<std::size_t>(i)] > 0.0))
+        throw std::invalid_argument("FederatedFilter: beta_" + std::to_string(i) + " must be > 0");
+      s += beta[static_cast<std::size_t>(i)];
+    }
+    if (std::abs(s - 1.0) > 1e-9) throw std::invalid_argument("FederatedFilter: the beta_i must sum to 1, got " + std::to_string(s));
+    global_ = initial;
+    reset_locals();
+  }
+
+  const Belief& global() const { return global_; }
+  const Belief& local(int i) const { return locals_[static_cast<std::size_t>(i)]; }
+  const std::array<double, L>& beta() const { return beta_; }
+
+  /// Predicts every local filter with its share of the process noise; all or nothing.
+  Status predict(const Input& u, double dt) {
+    auto next = locals_;
+    for (int i = 0; i < L; ++i) {
+      const detail::SharedProcess<Model> shared{model_, beta_[static_cast<std::size_t>(i)]};
+      Status s = ekf::predict(shared, next[static_cast<std::size_t>(i)], u, dt, options_);
+      if (!s.accepted()) return s;
+    }
+    locals_ = next;
+    return Status{};
+  }
+
+  /// Corrects local filter `i` only.
+  template <class Meas>
+  Status update(int i, const Meas& meas, const Vector<Meas::dim>& z) {
+    if (i < 0 || i >= L) return Status::invalid(Problem::measurement_out_of_domain);
+    return ekf::update<N>(meas, locals_[static_cast<std::size_t>(i)], z, gate_, options_);
+  }
+
+  /// Fuses the local estimates into the global one and resets the locals from it. Returns
+  /// false (nothing changed) when a covariance is not positive definite.
+  bool fuse_and_reset() {
+    Belief g;
+    if (!fuse(model_, locals_, g)) return false;
+    global_ = g;
+    reset_locals();
+    return true;
+  }
+
+ private:
+  void reset_locals() {
+    for (int i = 0; i < L; ++i) {
+      locals_[static_cast<std::size_t>(i)].mean = global_.mean;
+      locals_[static_cast<std::size_t>(i)].cov = global_.cov / beta_[static_cast<std::size_t>(i)];
+    }
+  }
+
+  Model model_;
+  std::array<double, L> beta_;
+  FilterOptions options_;
+  Gate gate_;
+  Belief global_;
+  std::array<Belief, L> locals_;
+};
+
+}  // namespace ctxfuse::fkf

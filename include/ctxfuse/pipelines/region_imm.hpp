@@ -1,0 +1,605 @@
+// The region paper's whole pipeline as a library piece (paper A in docs): per-epoch GNSS
+// features -> PSO-SVM + HMM + joint vote -> recognised region -> region-aware IMM over three
+// planar IMU-driven EKF sub-models, and the baselines it is compared with (GNSS alone, UWB
+// alone, each sub-model alone, federated Kalman filter, plain IMM). Runs on a simulated drive
+// (sim/drive.hpp).
+//
+// Every filter-based estimator gets the same sensors and the same noise settings (Settings):
+// IMU at 100 Hz drives the planar model, the no-side-slip constraint (10 Hz; optionally the
+// wheel speed too) corrects every filter, GNSS fixes (1 Hz, R from the receiver's reported sigma) and UWB ranges (10 Hz) go
+// to the sub-filters that take them. All filters start from the first GNSS fix with the
+// heading of the initial alignment (taken from truth, as a static alignment with a
+// magnetometer or a previous drive would give it, +/- 2 deg). Estimates are scored at every
+// GNSS epoch (1 Hz) against truth, per true region.
+//
+// Sub-models (paper's EKF-ODR, EKF-I-OTR, EKF-IDR): ODR takes GNSS; I-OTR takes GNSS and UWB,
+// each with its noise inflated by `iotr_noise_factor` (the "weighted" mode) and a larger
+// process noise; IDR takes UWB. Region-aware routing (proposed method): when the recognised
+// region is outdoor no sub-model takes UWB; when it is indoor no sub-model takes GNSS; in
+// the transition region every sub-model takes what its sensors provide. The plain IMM takes
+// everything everywhere, with the same sub-models and the same fixed transition matrix as
+// the prior of the region-adaptive one.
+// IMM cycles are 1 s long (mix at each GNSS epoch), the rate of the recognised labels, so
+// the transition matrices (fixed and recognised) are per second.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <optional>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "ctxfuse/classify/hmm.hpp"
+#include "ctxfuse/classify/joint.hpp"
+#include "ctxfuse/classify/svm.hpp"
+#include "ctxfuse/classify/svm_train.hpp"
+#include "ctxfuse/filters/ekf.hpp"
+#include "ctxfuse/filters/federated.hpp"
+#include "ctxfuse/filters/imm.hpp"
+#include "ctxfuse/models/kinematic.hpp"
+#include "ctxfuse/models/planar.hpp"
+#include "ctxfuse/policies/gating.hpp"
+#include "ctxfuse/policies/mixing.hpp"
+#include "ctxfuse/sim/drive.hpp"
+
+namespace ctxfuse::pipelines::region_imm {
+
+inline constexpr int kRegions = 3;  // 0 outdoor, 1 transition, 2 indoor
+
+// ---------------------------------------------------------------- region recognition
+using Feature = Eigen::Vector2d;  // (TNVS, mean SNR [dB-Hz])
+
+struct FeatureSeries {
+  std::vector<double> t;
+  std::vector<Feature> x;
+  std::vector<int> truth;  // region at the epoch
+};
+
+/// Features of every GNSS epoch; an epoch without satellites has mean SNR 0 (what a receiver
+/// that tracks nothing reports as its average).
+inline FeatureSeries gnss_features(const sim::Drive& d) {
+  FeatureSeries f;
+  for (const auto& e : d.gnss) {
+    f.t.push_back(e.t);
+    f.x.emplace_back(static_cast<double>(e.num_sats), e.num_sats > 0 ? e.mean_cn0_dbhz : 0.0);
+    f.truth.push_back(static_cast<int>(e.region));
+  }
+  return f;
+}
+
+struct RecogniserOptions {
+  // PSO over (log2 C, log2 gamma), 3-fold CV; a small swarm is enough for two parameters.
+  classify::SvmTuneOptions tune{.log2_c_min = -5.0, .log2_c_max = 10.0, .log2_gamma_min = -8.0, .log2_gamma_max = 3.0,
+                                .folds = 3, .fold_seed = 1, .pso = {.swarm_size = 6, .iterations = 5, .seed = 1}};
+  classify::HmmFitOptions hmm{};
+};
+
+struct Recogniser {
+  classify::SvmModel<2, 3> svm;
+  classify::GaussianHmm<kRegions, 2> hmm;
+  classify::WeightedVote<kRegions, 2> vote;
+  classify::SvmTuneResult tuned;
+  std::array<std::array<double, kRegions>, 2> validation_accuracy{};  // [svm, hmm][region]
+};
+
+struct Recognition {
+  std::vector<int> svm, hmm, joint;
+};
+
+inline std::vector<int> svm_labels(const classify::SvmModel<2, 3>& model, const FeatureSeries& f) {
+  std::vector<int> out;
+  out.reserve(f.x.size());
+  for (const auto& x : f.x) {
+    classify::SvmPrediction<3> p;
+    out.push_back(classify::svm_predict(model, x, p) == classify::SvmStatus::ok ? p.label : -1);
+  }
+  return out;
+}
+
+inline Recognition recognise(const Recogniser& r, const FeatureSeries& f) {
+  Recognition out;
+  out.svm = svm_labels(r.svm, f);
+  out.hmm = classify::viterbi<kRegions, 2>(r.hmm, std::span<const Feature>(f.x)).path;
+  out.joint.resize(f.x.size());
+  for (std::size_t i = 0; i < f.x.size(); ++i) out.joint[i] = r.vote({out.svm[i], out.hmm[i]});
+  return out;
+}
+
+/// PSO-SVM (one-vs-rest RBF) and HMM trained on `train`; per-region accuracies of both on
+/// `validate` give the joint vote's weights.
+inline Recogniser train_recogniser(const FeatureSeries& train, const FeatureSeries& validate,
+                                   const RecogniserOptions& opts = {}) {
+  Recogniser r;
+  classify::SvmFeatures<2> X(static_cast<Eigen::Index>(train.x.size()), 2);
+  for (std::size_t i = 0; i < train.x.size(); ++i) X.row(static_cast<Eigen::Index>(i)) = train.x[i].transpose();
+  classify::SvmTrainOptions so;
+  so.kernel = classify::SvmKernel::rbf;
+  so.multiclass = classify::SvmMulticlass::one_vs_rest;
+  r.tuned = classify::tune_svm_pso<2, 3>(X, train.truth, so, opts.tune);
+  so.C = r.tuned.C;
+  so.gamma = r.tuned.gamma;
+  r.svm = classify::train_svm<2, 3>(X, train.truth, so);
+
+  const classify::LabelledSequence<2> seq{std::span<const Feature>(train.x), std::span<const int>(train.truth)};
+  r.hmm = classify::fit_supervised<kRegions, 2>(std::span<const classify::LabelledSequence<2>>(&seq, 1), opts.hmm);
+
+  Recognition v;
+  v.svm = svm_labels(r.svm, validate);
+  v.hmm = classify::viterbi<kRegions, 2>(r.hmm, std::span<const Feature>(validate.x)).path;
+  r.validation_accuracy[0] = classify::per_region_accuracy<kRegions>(validate.truth, v.svm);
+  r.validation_accuracy[1] = classify::per_region_accuracy<kRegions>(validate.truth, v.hmm);
+  r.vote = classify::WeightedVote<kRegions, 2>::from_accuracies(r.validation_accuracy);
+  return r;
+}
+
+inline double accuracy(std::span<const int> truth, std::span<const int> predicted) {
+  if (truth.size() != predicted.size() || truth.empty()) return 0.0;
+  std::size_t ok = 0;
+  for (std::size_t i = 0; i < truth.size(); ++i) ok += truth[i] == predicted[i] ? 1 : 0;
+  return static_cast<double>(ok) / static_cast<double>(truth.size());
+}
+
+// ---------------------------------------------------------------- navigation
+struct Settings {
+  // Process noise (same model for every filter; per sub-model multipliers below).
+  double accel_noise_density = 0.05;  // [m/s^2/sqrt(Hz)] covers the IMU's bias/scale errors left unmodelled
+  double gyro_noise_density = 5e-4;   // [rad/s/sqrt(Hz)]
+  double gyro_bias_walk = 1e-5;
+  double accel_bias_walk = 1e-3;
+  std::array<double, 3> mode_process_noise_factor{1.0, 2.0, 1.0};  // ODR, I-OTR, IDR
+  // Measurements.
+  double uwb_sigma = 0.15;            // [m]
+  double uwb_tag_height = 1.0;        // [m] (simulator's tag height)
+  double uwb_alone_accel_psd = 1.0;   // [m^2/s^3] UWB-alone constant-velocity tracker
+  double uwb_hold_after_s = 1.0;      // UWB alone holds its last position after this long without a range
+  double gnss_sigma_floor = 0.5;      // [m] lower bound on the receiver-reported sigma
+  // Vehicle constraints, applied at the 10 Hz speed-sample times by every filter alike.
+  // Wheel speed (odometer) is off by default: the paper's sub-models use GNSS, UWB and the
+  // IMU only, and with an odometer every filter here dead-reckons so well that the methods
+  // cannot be told apart (docs/results.md, region_imm). The no-side-slip constraint needs no
+  // sensor and keeps the IMU-only dead reckoning of a car from diverging in minutes.
+  bool use_speed = false;
+  bool use_nhc = true;
+  double speed_sigma = 0.1;           // [m/s]
+  double lateral_sigma = 0.1;         // [m/s] no-side-slip
+  double iotr_noise_factor = 2.0;     // I-OTR's weighting of GNSS and UWB
+  // Chi-square gate on every GNSS/UWB update, loose on purpose: after minutes of dead
+  // reckoning a tight gate locks a filter out of the very measurements that would bring it
+  // back (seen on seed 2 with 0.999), which costs more than the NLOS ranges it rejects.
+  double gate_probability = 0.999999;
+  // Initial uncertainty.
+  double init_position_sigma = 3.0, init_velocity_sigma = 0.2, init_heading_sigma_deg = 2.0;
+  double init_gyro_bias_sigma = 1e-3, init_accel_bias_sigma = 0.05;
+  // IMM.
+  double stay_probability = 0.9;      // fixed prior: diagonal, per 1 s cycle
+  double prior_weight = 0.5;          // w_p; w_m = 1 - w_p
+  double probability_floor = 1e-4;
+};
+
+enum class Estimator { gnss, uwb, odr, iotr, idr, fkf, imm, region_imm };
+inline constexpr std::array<Estimator, 8> kAllEstimators{Estimator::gnss, Estimator::uwb, Estimator::odr,
+                                                          Estimator::iotr, Estimator::idr, Estimator::fkf,
+                                                          Estimator::imm, Estimator::region_imm};
+inline const char* name(Estimator e) {
+  switch (e) {
+    case Estimator::gnss: return "gnss";
+    case Estimator::uwb: return "uwb";
+    case Estimator::odr: return "odr";
+    case Estimator::iotr: return "iotr";
+    case Estimator::idr: return "idr";
+    case Estimator::fkf: return "fkf";
+    case Estimator::imm: return "imm";
+    case Estimator::region_imm: return "region_imm";
+  }
+  return "?";
+}
+
+/// Estimates at the GNSS epochs (ENU x, y) with the true region of each.
+struct Track {
+  std::vector<double> t;
+  std::vector<Eigen::Vector2d> estimate;
+  std::vector<Eigen::Vector2d> truth;
+  std::vector<int> region;
+  std::vector<int> dominant_mode;  // IMMs only
+};
+
+struct GnssTag {};
+struct UwbTag {};
+struct SpeedTag {};
+
+using L = models::PlanarLayout;
+using X = Vector<L::size>;
+
+namespace detail {
+
+inline models::PlanarImuModel process_model(const Settings& s, double factor) {
+  models::PlanarImuModel m;
+  m.accel_noise_density = s.accel_noise_density * std::sqrt(factor);
+  m.gyro_noise_density = s.gyro_noise_density * std::sqrt(factor);
+  m.gyro_bias_walk = s.gyro_bias_walk;
+  m.accel_bias_walk = s.accel_bias_walk;
+  return m;
+}
+
+inline models::PlanarImu planar_input(const sim::ImuSample& s) {
+  models::PlanarImu u;
+  u.yaw_rate = s.gyro.z();
+  u.accel = s.accel.head<2>();
+  return u;
+}
+
+inline Gaussian<L::size> initial_belief(const sim::Drive& d, const Settings& s, double t0, const Eigen::Vector2d& p0) {
+  Gaussian<L::size> b;
+  b.mean.setZero();
+  L::get<"p">(b.mean) = p0;
+  const auto k = static_cast<std::size_t>(std::lround(t0 * d.config.imu.rate_hz));
+  const auto& tr = d.truth[std::min(k, d.truth.size() - 1)];
+  L::get<"v">(b.mean) = tr.velocity.head<2>();
+  L::get<"psi">(b.mean)(0) = tr.yaw;
+  Vector<L::size> sd;
+  const double h = s.init_heading_sigma_deg * std::numbers::pi / 180.0;
+  sd << s.init_position_sigma, s.init_position_sigma, s.init_velocity_sigma, s.init_velocity_sigma, h,
+      s.init_gyro_bias_sigma, s.init_accel_bias_sigma, s.init_accel_bias_sigma;
+  b.cov = sd.cwiseProduct(sd).asDiagonal();
+  return b;
+}
+
+inline models::PlanarPosition gnss_meas(const sim::GnssEpoch& e, const Settings& s, double factor = 1.0) {
+  models::PlanarPosition m;
+  const double sd = std::max(e.std_horizontal_m, s.gnss_sigma_floor);
+  m.R = SquareMatrix<2>::Identity() * (sd * sd * factor);
+  return m;
+}
+inline models::PlanarRange uwb_meas(const sim::UwbRange& r, const Settings& s, double factor = 1.0) {
+  models::PlanarRange m;
+  m.anchor = r.anchor_position;
+  m.tag_height = s.uwb_tag_height;
+  m.sigma = s.uwb_sigma * std::sqrt(factor);
+  return m;
+}
+inline models::PlanarLateralVelocity nhc_meas(const Settings& s, double factor = 1.0) {
+  models::PlanarLateralVelocity m;
+  m.sigma = s.lateral_sigma * std::sqrt(factor);
+  return m;
+}
+inline models::PlanarBodyVelocity speed_meas(const Settings& s, double factor = 1.0) {
+  models::PlanarBodyVelocity m;
+  m.forward_sigma = s.speed_sigma * std::sqrt(factor);
+  m.lateral_sigma = s.lateral_sigma * std::sqrt(factor);
+  return m;
+}
+
+/// Walks the drive in time order: IMU predictions at 100 Hz and the measurements stamped at
+/// each IMU time (the simulator's rates divide the IMU rate). `sink` gets
+/// start(t0, p0), predict(u, dt), speed(sample), uwb(range), gnss(epoch) [cycle boundary],
+/// and epoch_done(epoch) after all measurements stamped at that epoch.
+template <class Sink>
+void replay(const sim::Drive& d, Sink& sink) {
+  std::size_t g = 0, w = 0, v = 0;
+  // Start at the first fix.
+  while (g < d.gnss.size() && !d.gnss[g].has_fix) ++g;
+  if (g == d.gnss.size()) throw std::invalid_argument("region_imm: the drive has no GNSS fix to start from");
+  const double t0 = d.gnss[g].t;
+  sink.start(t0, Eigen::Vector2d(d.gnss[g].position.head<2>()));
+  while (w < d.uwb.size() && d.uwb[w].t <= t0 + 1e-9) ++w;
+  while (v < d.speed.size() && d.speed[v].t <= t0 + 1e-9) ++v;
+  sink.epoch_done(d.gnss[g]);
+  ++g;
+  std::size_t k = 0;
+  while (k + 1 < d.imu.size() && d.imu[k + 1].t <= t0 + 1e-9) ++k;
+  for (; k + 1 < d.imu.size(); ++k) {
+    const double t = d.imu[k + 1].t;
+    sink.predict(planar_input(d.imu[k]), t - d.imu[k].t);
+    const bool gnss_now = g < d.gnss.size() && d.gnss[g].t <= t + 1e-9;
+    if (gnss_now) sink.cycle_start();
+    while (v < d.speed.size() && d.speed[v].t <= t + 1e-9) sink.speed(d.speed[v++]);
+    while (w < d.uwb.size() && d.uwb[w].t <= t + 1e-9) sink.uwb(d.uwb[w++]);
+    if (gnss_now) {
+      if (d.gnss[g].has_fix) sink.gnss(d.gnss[g]);
+      sink.epoch_done(d.gnss[g]);
+      ++g;
+    }
+  }
+}
+
+inline Eigen::Vector2d truth_at(const sim::Drive& d, double t) {
+  const auto k = static_cast<std::size_t>(std::lround(t * d.config.imu.rate_hz));
+  return d.truth[std::min(k, d.truth.size() - 1)].position.head<2>();
+}
+
+inline void record(Track& tr, const sim::Drive& d, const sim::GnssEpoch& e, const Eigen::Vector2d& p, int mode = -1) {
+  tr.t.push_back(e.t);
+  tr.estimate.push_back(p);
+  tr.truth.push_back(truth_at(d, e.t));
+  tr.region.push_back(static_cast<int>(e.region));
+  tr.dominant_mode.push_back(mode);
+}
+
+// ---- sinks ----
+struct GnssOnly {
+  const sim::Drive& d;
+  Track track;
+  Eigen::Vector2d last = Eigen::Vector2d::Zero();
+  void start(double, const Eigen::Vector2d& p0) { last = p0; }
+  void predict(const models::PlanarImu&, double) {}
+  void cycle_start() {}
+  void speed(const sim::SpeedSample&) {}
+  void uwb(const sim::UwbRange&) {}
+  void gnss(const sim::GnssEpoch& e) { last = e.position.head<2>(); }
+  // Without a fix the receiver's last position is all the user has.
+  void epoch_done(const sim::GnssEpoch& e) { record(track, d, e, last); }
+};
+
+/// UWB alone: the ranges in a constant-velocity EKF (no IMU), as a UWB positioning system
+/// runs its own tracker. The 7 anchors of the simulated garage give 2-4 ranges per epoch, too
+/// few for snapshot multilateration most of the time. Without an accepted range for
+/// `uwb_hold_after_s` the last position is held instead of extrapolated (what such a system
+/// reports when it loses the tag).
+struct UwbOnly {
+  using Cv = models::ConstantVelocity<L, 2>;
+  const sim::Drive& d;
+  const Settings& s;
+  Track track;
+  std::optional<Ekf<Cv, ChiSquareGate>> f;
+  double last_fix_t = -1e9;
+  Eigen::Vector2d held = Eigen::Vector2d::Zero();
+  double now = 0.0;
+  void start(double t0, const Eigen::Vector2d& p0) {
+    Cv cv;
+    cv.accel_psd = s.uwb_alone_accel_psd;
+    Gaussian<L::size> b;
+    b.mean.setZero();
+    L::get<"p">(b.mean) = p0;
+    b.cov = SquareMatrix<L::size>::Identity();
+    L::cov<"p">(b.cov) *= 100.0;
+    f.emplace(cv, b, FilterOptions{}, ChiSquareGate(s.gate_probability));
+    now = t0;
+    held = p0;
+  }
+  void predict(const models::PlanarImu&, double dt) {
+    now += dt;
+    (void)f->predict({}, dt);
+  }
+  void cycle_start() {}
+  void speed(const sim::SpeedSample&) {}
+  void uwb(const sim::UwbRange& r) {
+    if (now - last_fix_t > s.uwb_hold_after_s) {
+      // Re-acquisition: the tag is within radio range of this anchor; restart the track
+      // there with a covariance that spans that range.
+      auto b = f->belief();
+      // On the range circle toward the last held position (not on the anchor itself, where
+      // the range carries no direction and its Jacobian vanishes).
+      const Eigen::Vector2d a = r.anchor_position.head<2>();
+      const Eigen::Vector2d dir = (held - a).norm() > 1e-6 ? Eigen::Vector2d((held - a).normalized()) : Eigen::Vector2d(1.0, 0.0);
+      L::get<"p">(b.mean) = a + dir * std::max(r.range_m, 1.0);
+      L::get<"v">(b.mean).setZero();
+      b.cov = SquareMatrix<L::size>::Identity();
+      L::cov<"p">(b.cov) *= r.range_m * r.range_m + 1.0;
+      f->reset(b);
+    }
+    if (f->update(uwb_meas(r, s), Vector<1>(r.range_m)).accepted()) last_fix_t = now;
+  }
+  void gnss(const sim::GnssEpoch&) {}
+  void epoch_done(const sim::GnssEpoch& e) {
+    if (now - last_fix_t <= s.uwb_hold_after_s) held = L::get<"p">(f->belief().mean);
+    record(track, d, e, held);
+  }
+};
+
+/// One sub-model alone (EKF-ODR / EKF-I-OTR / EKF-IDR).
+struct SingleModel {
+  const sim::Drive& d;
+  const Settings& s;
+  bool takes_gnss, takes_uwb;
+  double process_factor, meas_factor;
+  Track track;
+  std::optional<Ekf<models::PlanarImuModel, ChiSquareGate>> f;
+  void start(double t0, const Eigen::Vector2d& p0) {
+    f.emplace(process_model(s, process_factor), initial_belief(d, s, t0, p0), FilterOptions{},
+              ChiSquareGate(s.gate_probability));
+  }
+  void predict(const models::PlanarImu& u, double dt) { (void)f->predict(u, dt); }
+  void cycle_start() {}
+  void speed(const sim::SpeedSample& v) {
+    if (s.use_speed)
+      (void)f->update(speed_meas(s), Vector<2>(v.speed_mps, 0.0));
+    else if (s.use_nhc)
+      (void)f->update(nhc_meas(s), Vector<1>(0.0));
+  }
+  void uwb(const sim::UwbRange& r) {
+    if (takes_uwb) (void)f->update(uwb_meas(r, s, meas_factor), Vector<1>(r.range_m));
+  }
+  void gnss(const sim::GnssEpoch& e) {
+    if (takes_gnss) (void)f->update(gnss_meas(e, s, meas_factor), Vector<2>(e.position.head<2>()));
+  }
+  void epoch_done(const sim::GnssEpoch& e) { record(track, d, e, L::get<"p">(f->belief().mean)); }
+};
+
+/// Federated filter: local filter 0 takes GNSS, local filter 1 takes UWB; both take speed
+/// with R / beta_i (its share); fusion and reset at every GNSS epoch.
+struct Federated {
+  const sim::Drive& d;
+  const Settings& s;
+  Track track;
+  std::array<double, 2> beta{0.5, 0.5};
+  std::optional<fkf::FederatedFilter<models::PlanarImuModel, 2, ChiSquareGate>> f;
+  void start(double t0, const Eigen::Vector2d& p0) {
+    f.emplace(process_model(s, 1.0), initial_belief(d, s, t0, p0), beta, FilterOptions{}, ChiSquareGate(s.gate_probability));
+  }
+  void predict(const models::PlanarImu& u, double dt) { (void)f->predict(u, dt); }
+  void cycle_start() {}
+  void speed(const sim::SpeedSample& v) {
+    for (int i = 0; i < 2; ++i) {
+      const double share = 1.0 / beta[static_cast<std::size_t>(i)];
+      if (s.use_speed)
+        (void)f->update(i, speed_meas(s, share), Vector<2>(v.speed_mps, 0.0));
+      else if (s.use_nhc)
+        (void)f->update(i, nhc_meas(s, share), Vector<1>(0.0));
+    }
+  }
+  void uwb(const sim::UwbRange& r) { (void)f->update(1, uwb_meas(r, s), Vector<1>(r.range_m)); }
+  void gnss(const sim::GnssEpoch& e) { (void)f->update(0, gnss_meas(e, s), Vector<2>(e.position.head<2>())); }
+  void epoch_done(const sim::GnssEpoch& e) {
+    (void)f->fuse_and_reset();
+    record(track, d, e, L::get<"p">(f->global().mean));
+  }
+};
+
+using OdrMode = imm::Mode<models::PlanarImuModel, imm::Accepts<GnssTag, SpeedTag>, ChiSquareGate>;
+using IotrMode = imm::Mode<models::PlanarImuModel, imm::Accepts<GnssTag, UwbTag, SpeedTag>, ChiSquareGate>;
+using IdrMode = imm::Mode<models::PlanarImuModel, imm::Accepts<UwbTag, SpeedTag>, ChiSquareGate>;
+
+template <class Mixing>
+using RegionImm = imm::Imm<Mixing, OdrMode, IotrMode, IdrMode>;
+
+inline auto make_modes(const Settings& s) {
+  const ChiSquareGate gate(s.gate_probability);
+  return boost::hana::make_tuple(OdrMode{process_model(s, s.mode_process_noise_factor[0]), gate},
+                                 IotrMode{process_model(s, s.mode_process_noise_factor[1]), gate},
+                                 IdrMode{process_model(s, s.mode_process_noise_factor[2]), gate});
+}
+
+/// Plain IMM (fixed matrix, no routing) or the region-aware one (recognised labels at the
+/// GNSS epochs: routing masks and the region-adaptive matrix).
+template <class Mixing>
+struct ImmSink {
+  const sim::Drive& d;
+  const Settings& s;
+  Mixing mixing;
+  const std::vector<int>* labels = nullptr;  // recognised region per GNSS epoch (null: plain IMM)
+  Track track;
+  std::optional<RegionImm<Mixing>> f;
+  std::size_t epoch = 0;
+  int region = -1;
+
+  void start(double t0, const Eigen::Vector2d& p0) {
+    imm::ImmOptions<3> o;
+    o.probability_floor = s.probability_floor;
+    f.emplace(mixing, make_modes(s), initial_belief(d, s, t0, p0), Vector<3>::Constant(1.0 / 3.0), o);
+    epoch = static_cast<std::size_t>(std::lround(t0 * d.config.gnss.rate_hz));
+    set_region();
+    f->mix();
+  }
+  void set_region() {
+    if (!labels) return;
+    region = epoch < labels->size() ? (*labels)[epoch] : -1;
+    f->mixing().observe_region(region);
+  }
+  std::uint32_t mask(bool gnss) const {
+    if (!labels || region < 0 || region == 1) return 0b111u;
+    if (region == 0) return gnss ? 0b111u : 0u;  // outdoor: nobody takes UWB
+    return gnss ? 0u : 0b111u;                   // indoor: nobody takes GNSS
+  }
+  void predict(const models::PlanarImu& u, double dt) { (void)f->predict(u, dt); }
+  void cycle_start() {}
+  void speed(const sim::SpeedSample& v) {
+    if (s.use_speed)
+      (void)f->update(SpeedTag{}, speed_meas(s), Vector<2>(v.speed_mps, 0.0));
+    else if (s.use_nhc)
+      (void)f->update(SpeedTag{}, nhc_meas(s), Vector<1>(0.0));
+  }
+  void uwb(const sim::UwbRange& r) {
+    const auto m = boost::hana::make_tuple(uwb_meas(r, s), uwb_meas(r, s, s.iotr_noise_factor), uwb_meas(r, s));
+    (void)f->update(UwbTag{}, m, Vector<1>(r.range_m), mask(false));
+  }
+  void gnss(const sim::GnssEpoch& e) {
+    const auto m = boost::hana::make_tuple(gnss_meas(e, s), gnss_meas(e, s, s.iotr_noise_factor), gnss_meas(e, s));
+    (void)f->update(GnssTag{}, m, Vector<2>(e.position.head<2>()), mask(true));
+  }
+  void epoch_done(const sim::GnssEpoch& e) {
+    f->update_mode_probabilities();
+    record(track, d, e, L::get<"p">(f->combined().mean), f->most_probable());
+    // Next cycle: the region recognised at this epoch (the latest known) routes the
+    // measurements until the next epoch.
+    epoch = static_cast<std::size_t>(std::lround(e.t * d.config.gnss.rate_hz));
+    set_region();
+    f->mix();
+  }
+};
+
+}  // namespace detail
+
+/// Runs one estimator over the drive. `labels` (recognised region per GNSS epoch) is needed
+/// by Estimator::region_imm only.
+inline Track run(const sim::Drive& d, Estimator e, const Settings& s, const std::vector<int>* labels = nullptr) {
+  switch (e) {
+    case Estimator::gnss: {
+      detail::GnssOnly sink{d, {}};
+      detail::replay(d, sink);
+      return sink.track;
+    }
+    case Estimator::uwb: {
+      detail::UwbOnly sink{d, s, {}, {}};
+      detail::replay(d, sink);
+      return sink.track;
+    }
+    case Estimator::odr:
+    case Estimator::iotr:
+    case Estimator::idr: {
+      const int k = e == Estimator::odr ? 0 : e == Estimator::iotr ? 1 : 2;
+      detail::SingleModel sink{d, s, k != 2, k != 0, s.mode_process_noise_factor[static_cast<std::size_t>(k)],
+                               k == 1 ? s.iotr_noise_factor : 1.0, {}, {}};
+      detail::replay(d, sink);
+      return sink.track;
+    }
+    case Estimator::fkf: {
+      detail::Federated sink{d, s, {}, {0.5, 0.5}, {}};
+      detail::replay(d, sink);
+      return sink.track;
+    }
+    case Estimator::imm: {
+      detail::ImmSink<policies::FixedTransition<3>> sink{
+          d, s, policies::FixedTransition<3>(policies::sticky_transition<3>(s.stay_probability)), nullptr, {}, {}};
+      detail::replay(d, sink);
+      return sink.track;
+    }
+    case Estimator::region_imm: {
+      if (!labels) throw std::invalid_argument("region_imm: the region-aware IMM needs the recognised labels");
+      detail::ImmSink<policies::RegionAdaptiveTransition<3>> sink{
+          d, s,
+          policies::RegionAdaptiveTransition<3>(policies::sticky_transition<3>(s.stay_probability), s.prior_weight,
+                                                1.0 - s.prior_weight),
+          labels, {}, {}};
+      detail::replay(d, sink);
+      return sink.track;
+    }
+  }
+  return {};
+}
+
+/// Mean horizontal error per true region and overall; X/Y RMSE per region and overall.
+struct TrackErrors {
+  std::array<double, 4> mean{};    // outdoor, transition, indoor, overall
+  std::array<double, 4> rmse_x{};
+  std::array<double, 4> rmse_y{};
+  std::array<std::size_t, 4> count{};
+};
+
+inline TrackErrors errors(const Track& tr) {
+  TrackErrors out;
+  std::array<double, 4> sum{}, sx{}, sy{};
+  for (std::size_t i = 0; i < tr.t.size(); ++i) {
+    const Eigen::Vector2d e = tr.estimate[i] - tr.truth[i];
+    for (int k : {tr.region[i], 3}) {
+      sum[static_cast<std::size_t>(k)] += e.norm();
+      sx[static_cast<std::size_t>(k)] += e.x() * e.x();
+      sy[static_cast<std::size_t>(k)] += e.y() * e.y();
+      ++out.count[static_cast<std::size_t>(k)];
+    }
+  }
+  for (std::size_t k = 0; k < 4; ++k) {
+    const double n = std::max<double>(1.0, static_cast<double>(out.count[k]));
+    out.mean[k] = sum[k] / n;
+    out.rmse_x[k] = std::sqrt(sx[k] / n);
+    out.rmse_y[k] = std::sqrt(sy[k] / n);
+  }
+  return out;
+}
+
+}  // namespace ctxfuse::pipelines::region_imm

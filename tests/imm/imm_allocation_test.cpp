@@ -1,0 +1,115 @@
+// The IMM step (mix, predict, routed updates, probability update, combination) must not touch
+// the heap, for vector modes (planar sub-models) and for error-state modes (15-state INS).
+// Counting operator new plus Eigen's runtime malloc guard, as tests/filters/allocation_test.cpp.
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+namespace {
+std::atomic<long> g_eigen_mallocs{0};
+}
+#define EIGEN_RUNTIME_NO_MALLOC
+#define eigen_assert(x)                                                \
+  do {                                                                 \
+    if (!(x)) g_eigen_mallocs.fetch_add(1, std::memory_order_relaxed); \
+  } while (0)
+
+#include <gtest/gtest.h>
+
+#include "ctxfuse/filters/imm.hpp"
+#include "ctxfuse/models/ins.hpp"
+#include "ctxfuse/models/ins_range.hpp"
+#include "ctxfuse/models/planar.hpp"
+#include "ctxfuse/policies/mixing.hpp"
+
+namespace {
+std::atomic<long> g_allocations{0};
+}
+
+void* operator new(std::size_t n) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t n) { return operator new(n); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+
+namespace {
+using namespace ctxfuse;
+namespace hana = boost::hana;
+
+template <class F>
+long heap_uses(F&& f) {
+  const long before = g_allocations.load() + g_eigen_mallocs.load();
+  Eigen::internal::set_is_malloc_allowed(false);
+  f();
+  Eigen::internal::set_is_malloc_allowed(true);
+  return g_allocations.load() + g_eigen_mallocs.load() - before;
+}
+
+struct GnssTag {};
+struct UwbTag {};
+
+TEST(ImmAllocation, PlanarRegionImmStepNeverAllocates) {
+  using M = models::PlanarImuModel;
+  auto modes = hana::make_tuple(imm::make_mode(M{}, imm::Accepts<GnssTag>{}, ChiSquareGate(0.999)),
+                                imm::make_mode(M{}, imm::Accepts<GnssTag, UwbTag>{}, ChiSquareGate(0.999)),
+                                imm::make_mode(M{}, imm::Accepts<UwbTag>{}, ChiSquareGate(0.999)));
+  Gaussian<8> init;
+  init.cov *= 0.1;
+  imm::Imm f(policies::RegionAdaptiveTransition<3, 16>(policies::sticky_transition<3>(0.9), 0.5, 0.5), modes, init,
+             Vector<3>::Constant(1.0 / 3.0));
+  models::PlanarImu u;
+  u.yaw_rate = 0.05;
+  u.accel << 0.2, 0.0;
+  models::PlanarPosition gnss;
+  models::PlanarRange range;
+  range.anchor << 10.0, 5.0, 3.0;
+  int scored = 0;
+  EXPECT_EQ(heap_uses([&] {
+              for (int k = 0; k < 300; ++k) {
+                f.mixing().observe_region(k / 100);
+                f.mix();
+                for (int i = 0; i < 10; ++i) (void)f.predict(u, 0.01);
+                scored += f.update(UwbTag{}, hana::make_tuple(range, range, range), Vector<1>(11.0), 0b110u).scored;
+                scored += f.update(GnssTag{}, gnss, Vector<2>(0.01 * k, 0.0)).scored;
+                (void)f.update(GnssTag{}, gnss, Vector<2>(1e5, 0.0));  // gated everywhere
+                f.update_mode_probabilities();
+                (void)f.combined();
+              }
+            }),
+            0);
+  EXPECT_GT(scored, 300);
+}
+
+TEST(ImmAllocation, ErrorStateInsImmStepNeverAllocates) {
+  using M = models::Ins15Model;
+  auto modes = hana::make_tuple(imm::make_mode(M{}), imm::make_mode(M{}), imm::make_mode(M{}));
+  eskf::Belief<M> init;
+  init.cov = SquareMatrix<15>::Identity() * 0.01;
+  imm::Imm f(policies::FixedTransition<3>(policies::sticky_transition<3>(0.9)), modes, init, Vector<3>::Constant(1.0 / 3.0));
+  models::ImuSample u;
+  u.accel << 0.1, 0.0, 9.81;
+  u.gyro << 0.0, 0.0, 0.05;
+  models::GnssPosition<> gnss;
+  models::InsRange<> range;
+  range.anchor << 5.0, 5.0, 2.0;
+  EXPECT_EQ(heap_uses([&] {
+              for (int k = 0; k < 200; ++k) {
+                f.mix();
+                (void)f.predict(u, 0.01);
+                (void)f.update(GnssTag{}, gnss, Vector<3>(0.001 * k, 0.0, 0.0));
+                (void)f.update(UwbTag{}, range, Vector<1>(7.1));
+                f.update_mode_probabilities();
+                (void)f.combined();
+              }
+            }),
+            0);
+  EXPECT_NEAR(f.mode_probabilities().sum(), 1.0, 1e-12);
+  EXPECT_TRUE(f.combined().nominal.p.allFinite());
+}
+
+}  // namespace
