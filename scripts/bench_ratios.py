@@ -13,7 +13,7 @@ RATIOS = [
     ("ZeroOverhead/Engine", "ZeroOverhead/HandWritten", "engine / hand-written (target <= 1.05)"),
     ("ZeroOverhead/Dynamic", "ZeroOverhead/Engine", "dynamic / engine (target >= 3)"),
     ("SvmPredictProbability/LibSvm", "SvmPredictProbability/Ours", "libsvm / ours, RBF predict with probabilities (target >= 8)"),
-    ("Imm/ThreeModeStep", "Imm/ThreeIndependentEskfSteps", "IMM step / three independent ESKF steps (mixing overhead)"),
+    ("BM_ImmStep3Eskf15", "BM_ThreeIndependentEskf15", "IMM step / three independent ESKF steps (mixing overhead)"),
 ]
 
 
