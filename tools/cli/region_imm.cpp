@@ -9,6 +9,7 @@
 #include <ostream>
 #include <string>
 
+#include "cli/plot.hpp"
 #include "cli/registry.hpp"
 #include "ctxfuse/pipelines/region_imm.hpp"
 #include "ctxfuse/sim/drive.hpp"
@@ -82,9 +83,29 @@ void run_section(const DemoContext& ctx, Json& json, std::ostream& out) {
   // ---- Tables 3-6: navigation.
   const ri::Settings settings;
   std::array<ri::TrackErrors, 8> errs;
+  std::array<ri::Track, 8> tracks;
   for (std::size_t i = 0; i < kPaperMean.size(); ++i) {
-    const auto tr = ri::run(test, kPaperMean[i].estimator, settings, &r.joint);
-    errs[i] = ri::errors(tr);
+    tracks[i] = ri::run(test, kPaperMean[i].estimator, settings, &r.joint);
+    errs[i] = ri::errors(tracks[i]);
+  }
+  if (ctx.plotter) {
+    // FKF, plain IMM and region IMM (rows 5-7) against the truth, and their error CDFs.
+    Plotter::Series truth{"truth", {}, true};
+    for (const auto& p : tracks[7].truth) truth.points.push_back(p);
+    std::vector<Plotter::Series> series{truth};
+    std::vector<std::pair<std::string, std::vector<double>>> cdf;
+    for (std::size_t i : {5u, 6u, 7u}) {
+      Plotter::Series s{kPaperMean[i].label, {}, true};
+      std::vector<double> e;
+      for (std::size_t k = 0; k < tracks[i].t.size(); ++k) {
+        s.points.push_back(tracks[i].estimate[k]);
+        e.push_back((tracks[i].estimate[k] - tracks[i].truth[k]).norm());
+      }
+      series.push_back(std::move(s));
+      cdf.emplace_back(kPaperMean[i].label, std::move(e));
+    }
+    ctx.plotter->trajectory("region_imm_trajectory", "Region IMM, plain IMM and FKF against the truth (1 Hz)", series);
+    ctx.plotter->error_cdf("region_imm_error_cdf", "Horizontal error CDF: FKF, IMM, region IMM", cdf);
   }
   ri::TrackErrors oracle;  // region IMM fed the true labels: how much recognition errors cost
   {

@@ -27,6 +27,14 @@ struct RouteConfig {
   double gate_stop_s = 6.0;
   double parking_stop_s = 15.0;
   double final_static_s = 10.0;
+  // Sky geometry of the site as GNSS sees it (UWB walls are unaffected).
+  /// The approach's buildings are this tall at its street end and rise linearly to the full
+  /// 12 m at the garage door: the covered approach opens onto the street and closes gradually
+  /// (a single tall canyon over its whole length would leave only near-axis satellites).
+  double approach_open_end_height_m = 3.0;
+  /// Clear height of the garage doorway (10 m wide): satellites low in the west stay visible
+  /// through it for the first metres inside.
+  double garage_door_height_m = 3.0;
 };
 
 /// MEMS IMU error model per axis: white noise given as a density, first-order Gauss-Markov
@@ -68,6 +76,27 @@ struct GnssConfig {
   double latitude_deg = 24.85;   // Kunming, where the region paper's drive took place
   double longitude_deg = 102.85;
   double sky_start_s = 0.0;      // orbit epoch offset: moves the sky to another time of day
+  double antenna_height_m = 1.5;  // above ground: sets what the garage doorway lets through
+  /// Slow C/N0 fading (multipath interference, body shadowing): a Gauss-Markov process per
+  /// satellite with this std per environment {open, obstructed street, transition/indoor} and
+  /// correlation time, added on top of the white epoch noise.
+  std::array<double, 3> cn0_fading_sigma_db{1.0, 2.5, 3.0};
+  double cn0_fading_tau_s = 3.0;
+  /// Roadside obstructions on the open outdoor streets (single tall buildings, tree rows):
+  /// this many stretches of this length, centred at points drawn uniformly along the open
+  /// street route, each hiding one side of the sky below an edge elevation drawn uniformly
+  /// in [min, max] (towards the perpendicular; lower at oblique azimuths, as a street wall),
+  /// with extra attenuation (foliage) on every signal inside the stretch.
+  int roadside_obstruction_count = 6;
+  double roadside_obstruction_length_m = 30.0;
+  double roadside_obstruction_edge_min_deg = 25.0;
+  double roadside_obstruction_edge_max_deg = 60.0;
+  double roadside_obstruction_attenuation_db = 2.0;
+  /// Signals reaching the receiver under the garage roof through the doorway lose this much
+  /// at the door (edge diffraction, door frame) plus this much per metre travelled under the
+  /// roof (scattering by parked cars, pillars): a few weak satellites for some metres inside.
+  double doorway_loss_db = 3.0;
+  double indoor_loss_db_per_m = 0.5;
 };
 
 struct UwbConfig {

@@ -104,6 +104,26 @@ struct MagSample {
   double disturbance_ut = 0.0;  // truth: norm of the local anomaly added to the earth field
 };
 
+/// Truth of one roadside obstruction (GnssConfig::roadside_obstruction_*): within radius_m of
+/// centre, satellites on the blocked side of the road axis are hidden below
+/// atan(tan(edge) * |sin(relative azimuth)|), arriving diffracted within the diffraction band.
+struct RoadsideObstruction {
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  double radius_m = 0.0;
+  double axis_yaw_rad = 0.0;  // road direction, ENU yaw
+  bool left_side = true;      // blocked side, looking along axis_yaw_rad
+  double edge_deg = 0.0;      // edge elevation perpendicular to the road
+
+  bool covers(const Eigen::Vector2d& p) const { return (p - centre).norm() <= radius_m; }
+  /// Edge elevation (deg) at this satellite azimuth (deg clockwise from north); 0 on the open side.
+  double mask_elevation_deg(double azimuth_deg) const {
+    const double sat_yaw = std::numbers::pi / 2.0 - azimuth_deg * std::numbers::pi / 180.0;
+    const double s = std::sin(sat_yaw - axis_yaw_rad);  // > 0: satellite to the left of the road
+    if ((s > 0.0) != left_side) return 0.0;
+    return std::atan(std::tan(edge_deg * std::numbers::pi / 180.0) * std::abs(s)) * 180.0 / std::numbers::pi;
+  }
+};
+
 struct Drive {
   DriveConfig config;
   Route route;  // includes the World (regions, canyons, walls, anchors)
@@ -112,6 +132,7 @@ struct Drive {
   ImuErrorTruth imu_errors;
   std::vector<GnssEpoch> gnss;
   std::vector<SatObservation> sats;
+  std::vector<RoadsideObstruction> roadside_obstructions;  // truth of the GNSS sky obstructions
   std::vector<UwbRange> uwb;
   std::vector<SpeedSample> speed;
   double speed_scale_error = 0.0;  // truth: measured = (1 + speed_scale_error) * true + noise
@@ -174,6 +195,18 @@ inline void check_config(const DriveConfig& c) {
   if (!(c.gnss.multipath_tau_s > 0.0)) bad("gnss.multipath_tau_s must be > 0");
   for (double v : c.gnss.uere_m) nonneg(v, "gnss.uere_m");
   for (double v : c.gnss.multipath_sigma_m) nonneg(v, "gnss.multipath_sigma_m");
+  for (double v : c.gnss.cn0_fading_sigma_db) nonneg(v, "gnss.cn0_fading_sigma_db");
+  if (!(c.gnss.cn0_fading_tau_s > 0.0)) bad("gnss.cn0_fading_tau_s must be > 0");
+  if (c.gnss.roadside_obstruction_count < 0 || c.gnss.roadside_obstruction_count > 1000)
+    bad("gnss.roadside_obstruction_count must be within [0, 1000]");
+  if (!(c.gnss.roadside_obstruction_length_m >= 0.0)) bad("gnss.roadside_obstruction_length_m must be >= 0");
+  if (!(c.gnss.roadside_obstruction_edge_min_deg >= 0.0 && c.gnss.roadside_obstruction_edge_min_deg <= c.gnss.roadside_obstruction_edge_max_deg &&
+        c.gnss.roadside_obstruction_edge_max_deg < 90.0))
+    bad("gnss.roadside_obstruction_edge_min/max_deg must satisfy 0 <= min <= max < 90");
+  nonneg(c.gnss.roadside_obstruction_attenuation_db, "gnss.roadside_obstruction_attenuation_db");
+  nonneg(c.gnss.doorway_loss_db, "gnss.doorway_loss_db");
+  nonneg(c.gnss.indoor_loss_db_per_m, "gnss.indoor_loss_db_per_m");
+  if (!(c.gnss.antenna_height_m >= 0.0 && c.gnss.antenna_height_m <= 10.0)) bad("gnss.antenna_height_m must be within [0, 10] m");
   nonneg(c.uwb.range_noise_m, "uwb.range_noise_m");
   nonneg(c.uwb.nlos_extra_noise_m, "uwb.nlos_extra_noise_m");
   if (!(c.uwb.nlos_bias_min_m >= 0.0 && c.uwb.nlos_bias_max_m >= c.uwb.nlos_bias_min_m))
@@ -274,6 +307,28 @@ inline void simulate_gnss(Drive& d) {
   const GaussMarkov mp_gm{1.0, c.multipath_tau_s};  // unit std, scaled per environment
   Eigen::Vector3d mp_unit;
   for (int i = 0; i < 3; ++i) mp_unit[i] = mp_gm.start(rng);
+  const GaussMarkov fading_gm{1.0, c.cn0_fading_tau_s};  // unit std, scaled per environment
+  std::array<double, 400> fading_unit{};
+  for (auto& f : fading_unit) f = fading_gm.start(rng);
+  // Roadside obstructions: centres drawn uniformly over the open-street part of the route
+  // (sampled every 0.5 s of drive time, i.e. weighted by time spent there).
+  d.roadside_obstructions.clear();
+  {
+    std::vector<KinematicState> open_route;
+    for (double t = 0.0; t < d.route.duration(); t += 0.5) {
+      const KinematicState st = d.route.state_at(t);
+      if (world.scene_at(Eigen::Vector2d(st.position.head<2>())) == Scene::open) open_route.push_back(st);
+    }
+    for (int k = 0; k < c.roadside_obstruction_count; ++k) {
+      const double pick = rng.uniform(), side = rng.uniform(), edge = rng.uniform();
+      if (open_route.empty()) continue;
+      const auto& st = open_route[std::min(open_route.size() - 1, static_cast<std::size_t>(pick * static_cast<double>(open_route.size())))];
+      d.roadside_obstructions.push_back({st.position.head<2>(), 0.5 * c.roadside_obstruction_length_m, st.yaw, side < 0.5,
+                                         c.roadside_obstruction_edge_min_deg +
+                                             (c.roadside_obstruction_edge_max_deg - c.roadside_obstruction_edge_min_deg) * edge});
+    }
+  }
+  const Doorway& door = world.garage_door;
   const double dt = 1.0 / c.rate_hz;
   std::vector<LookAngle> sky_now;
   std::vector<Eigen::Vector3d> los_used;
@@ -286,8 +341,20 @@ inline void simulate_gnss(Drive& d) {
     e.scene = world.scene_at(p2);
     e.first_sat = d.sats.size();
     for (int i = 0; i < 3; ++i) mp_unit[i] = mp_gm.step(mp_unit[i], dt, rng);
+    for (auto& f : fading_unit) f = fading_gm.step(f, dt, rng);
     sky.visible(t, c.elevation_mask_deg, sky_now);
     const StreetCanyon* canyon = world.canyon_at(p2);
+    const RoadsideObstruction* roadside = nullptr;
+    if (e.scene == Scene::open)
+      for (const auto& o : d.roadside_obstructions)
+        if (o.covers(p2)) {
+          roadside = &o;
+          break;
+        }
+    const double fading_sigma = c.cn0_fading_sigma_db[static_cast<std::size_t>(
+        e.region == Region::indoor ? GnssEnvironment::transition : gnss_environment(e.region, e.scene))];
+    // Indoors, the doorway's centre seen from here decides which canyon the escaping ray meets.
+    const StreetCanyon* outside_canyon = world.canyon_at(Eigen::Vector2d(0.5 * (door.a + door.b) + Eigen::Vector2d(-0.5, 0.0)));
     los_used.clear();
     double cn0_sum = 0.0;
     for (const auto& la : sky_now) {
@@ -295,22 +362,50 @@ inline void simulate_gnss(Drive& d) {
       // sequence does not depend on the geometry.
       const double noise_unit = rng.normal();
       const double loss_unit = rng.uniform();
-      if (e.region == Region::indoor) continue;  // the roof hides the whole sky
       bool los = true;
       double loss = 0.0;
-      if (canyon) {
-        const double edge = canyon->mask_elevation_deg(la.azimuth_deg);
-        if (la.elevation_deg < edge - c.diffraction_band_deg) continue;
-        if (la.elevation_deg < edge) {
+      auto obstruct = [&](double edge_deg) {  // false: hidden
+        if (la.elevation_deg < edge_deg - c.diffraction_band_deg) return false;
+        if (la.elevation_deg < edge_deg && los) {
           los = false;
-          loss = c.diffraction_loss_min_db + (c.diffraction_loss_max_db - c.diffraction_loss_min_db) * loss_unit;
+          loss += c.diffraction_loss_min_db + (c.diffraction_loss_max_db - c.diffraction_loss_min_db) * loss_unit;
         }
+        return true;
+      };
+      if (e.region == Region::indoor) {
+        // The roof hides the sky except through the doorway: the horizontal ray towards the
+        // satellite must leave through the opening, below its top (or within the diffraction
+        // band above it), and then clear the approach's buildings at the door.
+        const double az = la.azimuth_deg * std::numbers::pi / 180.0;
+        const Eigen::Vector2d dir(std::sin(az), std::cos(az));
+        const Eigen::Vector2d span = door.b - door.a;
+        const double denom = dir.x() * span.y() - dir.y() * span.x();
+        if (std::abs(denom) < 1e-12) continue;
+        const Eigen::Vector2d rel = door.a - p2;
+        const double run = (rel.x() * span.y() - rel.y() * span.x()) / denom;  // metres under the roof
+        const double u = (rel.x() * dir.y() - rel.y() * dir.x()) / denom;
+        if (!(run > 0.0) || u < 0.0 || u > 1.0 || door.height_m <= c.antenna_height_m) continue;
+        const double top_deg = std::atan2(door.height_m - c.antenna_height_m, run) * 180.0 / std::numbers::pi;
+        // The lintel hides what is above the opening (diffracted just above its edge).
+        if (la.elevation_deg > top_deg + c.diffraction_band_deg) continue;
+        if (la.elevation_deg > top_deg) {
+          los = false;
+          loss += c.diffraction_loss_min_db + (c.diffraction_loss_max_db - c.diffraction_loss_min_db) * loss_unit;
+        }
+        if (outside_canyon && !obstruct(outside_canyon->mask_elevation_deg(la.azimuth_deg, door.a))) continue;
+        loss += c.doorway_loss_db + c.indoor_loss_db_per_m * run + (outside_canyon ? outside_canyon->extra_attenuation_db : 0.0);
+      } else if (canyon) {
+        if (!obstruct(canyon->mask_elevation_deg(la.azimuth_deg, p2))) continue;
         loss += canyon->extra_attenuation_db;
+      } else if (roadside) {
+        if (!obstruct(roadside->mask_elevation_deg(la.azimuth_deg))) continue;
+        loss += c.roadside_obstruction_attenuation_db;
       }
       const double sin_el = std::sin(la.elevation_deg * std::numbers::pi / 180.0);
       const double cn0 = c.cn0_horizon_dbhz + (c.cn0_zenith_dbhz - c.cn0_horizon_dbhz) * sin_el +
                          sat_offset[static_cast<std::size_t>(la.sat_id) % sat_offset.size()] - loss +
-                         (los ? c.cn0_noise_los_db : c.cn0_noise_nlos_db) * noise_unit;
+                         (los ? c.cn0_noise_los_db : c.cn0_noise_nlos_db) * noise_unit +
+                         fading_sigma * fading_unit[static_cast<std::size_t>(la.sat_id) % fading_unit.size()];
       if (cn0 < c.tracking_threshold_dbhz) continue;
       d.sats.push_back({t, la.sat_id, la.elevation_deg, la.azimuth_deg, cn0, los});
       los_used.push_back(la.los_enu);

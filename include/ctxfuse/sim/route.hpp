@@ -282,7 +282,10 @@ inline Route build_route(const RouteConfig& cfg, const RouteLayout& lay) {
   w.indoor = Polygon::rectangle(0.0, -garage_half, garage_east, garage_half);
   w.transition = Polygon::rectangle(-L, -approach_half, 0.0, approach_half);
   // Approach: tall buildings 6 m either side of the lane plus a canopy.
-  w.canyons.push_back({w.transition, 0.0, 12.0, approach_half, 3.0});
+  // The approach opens onto the street at its west end and closes towards the garage.
+  w.canyons.push_back({w.transition, 0.0, 12.0, approach_half, 3.0, {-L, 0.0}, {0.0, 0.0},
+                       std::min(cfg.approach_open_end_height_m, 12.0)});
+  w.garage_door = {{0.0, -door_half}, {0.0, door_half}, cfg.garage_door_height_m};
   // The north-going street of the first outdoor part is a canyon (obstructed scene).
   const double xs = -L - o3 - R;
   w.canyons.push_back({Polygon::rectangle(xs - 12.0, -R - o2, xs + 12.0, -R), pi / 2, 14.0, 11.0, 0.0});
@@ -342,6 +345,9 @@ inline Route make_route(const RouteConfig& cfg) {
   for (double v : {cfg.outdoor_speed_mps, cfg.transition_speed_mps, cfg.indoor_speed_mps})
     if (!(v >= 0.5 && v <= 30.0)) bad("speeds must be within [0.5, 30] m/s");
   if (!(cfg.max_accel_mps2 >= 0.2 && cfg.max_accel_mps2 <= 5.0)) bad("max_accel_mps2 must be within [0.2, 5]");
+  if (!(cfg.approach_open_end_height_m >= 0.0 && cfg.approach_open_end_height_m <= 12.0))
+    bad("approach_open_end_height_m must be within [0, 12] m");
+  if (!(cfg.garage_door_height_m >= 0.0 && cfg.garage_door_height_m <= 10.0)) bad("garage_door_height_m must be within [0, 10] m");
   if (cfg.indoor_laps < 1 || cfg.indoor_laps > 50) bad("indoor_laps must be within [1, 50]");
   if (!(cfg.curvature_ramp_m >= 0.5 && cfg.curvature_ramp_m <= 8.0)) bad("curvature_ramp_m must be within [0.5, 8] m");
   for (double s : {cfg.initial_static_s, cfg.traffic_stop_s, cfg.gate_stop_s, cfg.parking_stop_s, cfg.final_static_s})

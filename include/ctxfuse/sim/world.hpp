@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -93,14 +94,38 @@ struct StreetCanyon {
   double building_height_m = 0.0;
   double half_width_m = 10.0;   // street centre line to building face
   double extra_attenuation_db = 0.0;  // canopies, trees, glass: applies to every satellite
+  /// Optional gradual closing: the buildings are open_end_height_m tall at open_end and rise
+  /// linearly to building_height_m at closed_end (by projection on that segment; clamped
+  /// beyond its ends). open_end_height_m < 0: the same height everywhere.
+  Eigen::Vector2d open_end = Eigen::Vector2d::Zero();
+  Eigen::Vector2d closed_end = Eigen::Vector2d::Zero();
+  double open_end_height_m = -1.0;
 
+  double height_at(const Eigen::Vector2d& p) const {
+    const Eigen::Vector2d axis = closed_end - open_end;
+    if (open_end_height_m < 0.0 || axis.squaredNorm() <= 0.0) return building_height_m;
+    const double f = std::clamp((p - open_end).dot(axis) / axis.squaredNorm(), 0.0, 1.0);
+    return open_end_height_m + (building_height_m - open_end_height_m) * f;
+  }
   /// Elevation (degrees) below which the buildings hide a satellite at this azimuth
-  /// (degrees clockwise from north).
-  double mask_elevation_deg(double azimuth_deg) const {
+  /// (degrees clockwise from north), for buildings of the given height.
+  double mask_elevation_deg(double azimuth_deg, double height_m) const {
     const double sat_yaw = std::numbers::pi / 2.0 - azimuth_deg * std::numbers::pi / 180.0;  // to ENU yaw convention
     const double s = std::abs(std::sin(sat_yaw - axis_yaw_rad));
-    return std::atan2(building_height_m * s, half_width_m) * 180.0 / std::numbers::pi;
+    return std::atan2(height_m * s, half_width_m) * 180.0 / std::numbers::pi;
   }
+  double mask_elevation_deg(double azimuth_deg) const { return mask_elevation_deg(azimuth_deg, building_height_m); }
+  double mask_elevation_deg(double azimuth_deg, const Eigen::Vector2d& p) const {
+    return mask_elevation_deg(azimuth_deg, height_at(p));
+  }
+};
+
+/// An opening in a roofed area's wall (the garage doorway) through which satellites low
+/// enough in its direction remain visible from inside.
+struct Doorway {
+  Eigen::Vector2d a = Eigen::Vector2d::Zero();
+  Eigen::Vector2d b = Eigen::Vector2d::Zero();
+  double height_m = 0.0;  // clear height above ground
 };
 
 struct UwbAnchor {
@@ -114,6 +139,7 @@ struct World {
   std::vector<StreetCanyon> canyons;  // obstructed streets, including the transition approach
   std::vector<Wall> walls;            // UWB obstacles: garage walls, pillars, approach walls
   std::vector<UwbAnchor> anchors;
+  Doorway garage_door;                // in the indoor polygon's wall
 
   Region region_at(const Eigen::Vector2d& p) const {
     if (indoor.contains(p)) return Region::indoor;
