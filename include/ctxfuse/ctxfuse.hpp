@@ -6,6 +6,7 @@
 #include "ctxfuse/core/gaussian.hpp"
 #include "ctxfuse/core/layout.hpp"
 #include "ctxfuse/core/numerics.hpp"
+#include "ctxfuse/core/retraction.hpp"
 #include "ctxfuse/core/so3.hpp"
 #include "ctxfuse/core/status.hpp"
 #include "ctxfuse/core/types.hpp"

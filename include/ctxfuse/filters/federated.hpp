@@ -24,27 +24,13 @@
 
 #include "ctxfuse/core/concepts.hpp"
 #include "ctxfuse/core/gaussian.hpp"
+#include "ctxfuse/core/retraction.hpp"
 #include "ctxfuse/filters/ekf.hpp"
 #include "ctxfuse/policies/gating.hpp"
 
 namespace ctxfuse::fkf {
 
 namespace detail {
-template <class Model, int N>
-Vector<N> difference(const Model& m, const Vector<N>& a, const Vector<N>& b) {
-  if constexpr (requires { { m.difference(a, b) } -> std::convertible_to<Vector<N>>; })
-    return m.difference(a, b);
-  else
-    return a - b;
-}
-template <class Model, int N>
-Vector<N> inject(const Model& m, const Vector<N>& x, const Vector<N>& dx) {
-  if constexpr (requires { { m.inject(x, dx) } -> std::convertible_to<Vector<N>>; })
-    return m.inject(x, dx);
-  else
-    return x + dx;
-}
-
 /// Q / beta for the local filter's share of the process information.
 template <class Model>
 struct SharedProcess {
@@ -74,7 +60,7 @@ bool fuse(const Model& model, const std::array<Gaussian<N>, L>& locals, Gaussian
     if (llt.info() != Eigen::Success) return false;
     const SquareMatrix<N> Pinv = llt.solve(SquareMatrix<N>::Identity());
     info += Pinv;
-    info_state += Pinv * detail::difference(model, b.mean, ref);
+    info_state += Pinv * state_difference(model, b.mean, ref);
   }
   symmetrize(info);
   Eigen::LLT<SquareMatrix<N>> llt(info);
@@ -83,7 +69,7 @@ bool fuse(const Model& model, const std::array<Gaussian<N>, L>& locals, Gaussian
   symmetrize(Pg);
   const Vector<N> dx = llt.solve(info_state);
   if (!Pg.allFinite() || !dx.allFinite()) return false;
-  out.mean = detail::inject(model, ref, dx);
+  out.mean = state_inject(model, ref, dx);
   out.cov = Pg;
   return true;
 }

@@ -61,6 +61,7 @@
 
 #include "ctxfuse/core/concepts.hpp"
 #include "ctxfuse/core/gaussian.hpp"
+#include "ctxfuse/core/retraction.hpp"
 #include "ctxfuse/core/validation.hpp"
 #include "ctxfuse/filters/ekf.hpp"
 #include "ctxfuse/filters/eskf.hpp"
@@ -119,21 +120,6 @@ auto& point(B& b) {
     return b.nominal;
   else
     return b.mean;
-}
-
-template <class Model>
-Vector<Model::dim> difference(const Model& m, const typename Model::State& a, const typename Model::State& b) {
-  if constexpr (requires { { m.difference(a, b) } -> std::convertible_to<Vector<Model::dim>>; })
-    return m.difference(a, b);
-  else
-    return a - b;
-}
-template <class Model>
-typename Model::State inject(const Model& m, const typename Model::State& x, const Vector<Model::dim>& dx) {
-  if constexpr (requires { { m.inject(x, dx) } -> std::convertible_to<typename Model::State>; })
-    return m.inject(x, dx);
-  else
-    return x + dx;
 }
 
 template <class T>
@@ -228,7 +214,7 @@ class Imm {
     const State ref_point = point_of(ref);
     std::array<Vector<N>, R> dx;
     hana::for_each(indices(), [&](auto i) {
-      dx[i] = detail::difference(model_of(i), detail::point(beliefs_[i]), ref_point);
+      dx[i] = state_difference(model_of(i), detail::point(beliefs_[i]), ref_point);
     });
     std::array<SquareMatrix<N>, R> covs;
     hana::for_each(indices(), [&](auto i) { covs[i] = beliefs_[i].cov; });
@@ -244,7 +230,7 @@ class Imm {
         P0 += w(i, jj) * (covs[static_cast<std::size_t>(i)] + d * d.transpose());
       }
       symmetrize(P0);
-      detail::point(mixed[j]) = detail::inject(model_of(j), ref_point, m);
+      detail::point(mixed[j]) = state_inject(model_of(j), ref_point, m);
       mixed[j].cov = P0;
     });
     beliefs_ = mixed;
@@ -345,7 +331,7 @@ class Imm {
     std::array<Vector<N>, R> dx;
     std::array<SquareMatrix<N>, R> covs;
     hana::for_each(indices(), [&](auto i) {
-      dx[i] = detail::difference(model_of(i), detail::point(beliefs_[i]), ref_point);
+      dx[i] = state_difference(model_of(i), detail::point(beliefs_[i]), ref_point);
       covs[i] = beliefs_[i].cov;
     });
     Vector<N> m = Vector<N>::Zero();
@@ -357,7 +343,7 @@ class Imm {
     }
     symmetrize(P);
     Belief out;
-    detail::point(out) = detail::inject(modes_[hana::size_c<0>].model, ref_point, m);
+    detail::point(out) = state_inject(modes_[hana::size_c<0>].model, ref_point, m);
     out.cov = P;
     return out;
   }
