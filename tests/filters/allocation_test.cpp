@@ -1,19 +1,6 @@
-// predict and update must not touch the heap: count every allocation through a replaced
-// global operator new while the filters run. Eigen's dynamic storage goes through malloc,
-// not operator new, so Eigen's own runtime guard (EIGEN_RUNTIME_NO_MALLOC) is armed too and
-// its assertion, which NDEBUG would otherwise compile out, is routed to a counter.
-#include <atomic>
-#include <cstdlib>
-#include <new>
-
-namespace {
-std::atomic<long> g_eigen_mallocs{0};
-}
-#define EIGEN_RUNTIME_NO_MALLOC
-#define eigen_assert(x)                                              \
-  do {                                                               \
-    if (!(x)) g_eigen_mallocs.fetch_add(1, std::memory_order_relaxed); \
-  } while (0)
+// predict and update must not touch the heap (support/heap_counter.hpp counts operator new
+// and Eigen's own mallocs while the filters run).
+#include "support/heap_counter.hpp"
 
 #include <gtest/gtest.h>
 
@@ -23,32 +10,9 @@ std::atomic<long> g_eigen_mallocs{0};
 #include "ctxfuse/models/kinematic.hpp"
 
 namespace {
-std::atomic<long> g_allocations{0};
-}
-
-void* operator new(std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) { return operator new(n); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-
-namespace {
 using namespace ctxfuse;
 
-// Counts both kinds of heap use while `f` runs.
-template <class F>
-long heap_uses(F&& f) {
-  const long before = g_allocations.load() + g_eigen_mallocs.load();
-  Eigen::internal::set_is_malloc_allowed(false);
-  f();
-  Eigen::internal::set_is_malloc_allowed(true);
-  return g_allocations.load() + g_eigen_mallocs.load() - before;
-}
+using test::heap_uses;
 
 TEST(Allocation, CountersSeeHeapAllocations) {
   // Through a volatile pointer, so the compiler may not elide the new-expression.

@@ -1,18 +1,7 @@
 // The IMM step (mix, predict, routed updates, probability update, combination) must not touch
 // the heap, for vector modes (planar sub-models) and for error-state modes (15-state INS).
 // Counting operator new plus Eigen's runtime malloc guard, as tests/filters/allocation_test.cpp.
-#include <atomic>
-#include <cstdlib>
-#include <new>
-
-namespace {
-std::atomic<long> g_eigen_mallocs{0};
-}
-#define EIGEN_RUNTIME_NO_MALLOC
-#define eigen_assert(x)                                                \
-  do {                                                                 \
-    if (!(x)) g_eigen_mallocs.fetch_add(1, std::memory_order_relaxed); \
-  } while (0)
+#include "support/heap_counter.hpp"
 
 #include <gtest/gtest.h>
 
@@ -23,32 +12,10 @@ std::atomic<long> g_eigen_mallocs{0};
 #include "ctxfuse/policies/mixing.hpp"
 
 namespace {
-std::atomic<long> g_allocations{0};
-}
-
-void* operator new(std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) { return operator new(n); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-
-namespace {
 using namespace ctxfuse;
 namespace hana = boost::hana;
 
-template <class F>
-long heap_uses(F&& f) {
-  const long before = g_allocations.load() + g_eigen_mallocs.load();
-  Eigen::internal::set_is_malloc_allowed(false);
-  f();
-  Eigen::internal::set_is_malloc_allowed(true);
-  return g_allocations.load() + g_eigen_mallocs.load() - before;
-}
+using test::heap_uses;
 
 struct GnssTag {};
 struct UwbTag {};
