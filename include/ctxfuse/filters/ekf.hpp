@@ -12,6 +12,7 @@
 #include "ctxfuse/core/validation.hpp"
 #include "ctxfuse/filters/filter_clock.hpp"
 #include "ctxfuse/filters/kalman_update.hpp"
+#include "ctxfuse/filters/stateful_filter.hpp"
 #include "ctxfuse/policies/gating.hpp"
 
 namespace ctxfuse::ekf {
@@ -74,47 +75,25 @@ Status update(const Meas& meas, Gaussian<N>& belief, const Vector<Meas::dim>& z,
 
 namespace ctxfuse {
 
+struct EkfSteps {
+  template <class Model, class Belief, class Input>
+  static Status predict(const Model& m, Belief& b, const Input& u, double dt, const FilterOptions& o) {
+    return ekf::predict(m, b, u, dt, o);
+  }
+  template <class Model, class Meas, class Belief, class Gate>
+  static Status update(const Model&, const Meas& h, Belief& b, const Vector<Meas::dim>& z, const Gate& g,
+                       const FilterOptions& o) {
+    return ekf::update<Model::dim>(h, b, z, g, o);
+  }
+};
+
 /// Stateful EKF: belief + clock + gate around the ekf:: steps.
 template <VectorProcessModel Model, GatePolicy Gate = NoGate>
-class Ekf {
+class Ekf : public detail::StatefulFilter<Model, Gate, Gaussian<Model::dim>, EkfSteps> {
+  using Base = detail::StatefulFilter<Model, Gate, Gaussian<Model::dim>, EkfSteps>;
+
  public:
-  static constexpr int dim = Model::dim;
-  using Input = typename Model::Input;
-  using Belief = Gaussian<dim>;
-
-  Ekf(Model model, Belief initial, FilterOptions options = {}, Gate gate = {})
-      : model_(std::move(model)), belief_(std::move(initial)), options_(options), gate_(std::move(gate)) {}
-
-  const Belief& belief() const { return belief_; }
-  const Model& model() const { return model_; }
-  const Gate& gate() const { return gate_; }
-  const FilterOptions& options() const { return options_; }
-  double time() const { return clock_.time(); }
-  void set_time(double t) { clock_.set(t); }
-  void reset(const Belief& b) { belief_ = b; }
-
-  Status predict(const Input& u, double dt) { return ekf::predict(model_, belief_, u, dt, options_); }
-
-  /// Predict from the filter time to `t`; out-of-order or unset time is rejected.
-  Status predict_to(double t, const Input& u) {
-    double dt = 0.0;
-    if (Problem p = clock_.dt_to(t, dt); p != Problem::none) return Status::invalid(p);
-    Status s = predict(u, dt);
-    if (s) clock_.set(t);
-    return s;
-  }
-
-  template <class Meas>
-  Status update(const Meas& meas, const Vector<Meas::dim>& z) {
-    return ekf::update<dim>(meas, belief_, z, gate_, options_);
-  }
-
- private:
-  Model model_;
-  Belief belief_;
-  FilterOptions options_;
-  Gate gate_;
-  FilterClock clock_;
+  using Base::Base;
 };
 
 }  // namespace ctxfuse

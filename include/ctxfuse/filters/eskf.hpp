@@ -10,6 +10,7 @@
 #include "ctxfuse/core/validation.hpp"
 #include "ctxfuse/filters/filter_clock.hpp"
 #include "ctxfuse/filters/kalman_update.hpp"
+#include "ctxfuse/filters/stateful_filter.hpp"
 #include "ctxfuse/policies/gating.hpp"
 
 namespace ctxfuse::eskf {
@@ -95,48 +96,27 @@ Status update(const Model& model, const Meas& meas, Belief<Model>& belief, const
 
 namespace ctxfuse {
 
+struct EskfSteps {
+  template <class Model, class Belief, class Input>
+  static Status predict(const Model& m, Belief& b, const Input& u, double dt, const FilterOptions& o) {
+    return eskf::predict(m, b, u, dt, o);
+  }
+  template <class Model, class Meas, class Belief, class Gate>
+  static Status update(const Model& m, const Meas& h, Belief& b, const Vector<Meas::dim>& z, const Gate& g,
+                       const FilterOptions& o) {
+    return eskf::update(m, h, b, z, g, o);
+  }
+};
+
 /// Stateful error-state EKF: belief + clock + gate around the eskf:: steps.
 template <ErrorStateProcessModel Model, GatePolicy Gate = NoGate>
-class Eskf {
+class Eskf : public detail::StatefulFilter<Model, Gate, eskf::Belief<Model>, EskfSteps> {
+  using Base = detail::StatefulFilter<Model, Gate, eskf::Belief<Model>, EskfSteps>;
+
  public:
-  static constexpr int dim = Model::dim;
   using State = typename Model::State;
-  using Input = typename Model::Input;
-  using Belief = eskf::Belief<Model>;
-
-  Eskf(Model model, Belief initial, FilterOptions options = {}, Gate gate = {})
-      : model_(std::move(model)), belief_(std::move(initial)), options_(options), gate_(std::move(gate)) {}
-
-  const Belief& belief() const { return belief_; }
-  const State& nominal() const { return belief_.nominal; }
-  const Model& model() const { return model_; }
-  const Gate& gate() const { return gate_; }
-  const FilterOptions& options() const { return options_; }
-  double time() const { return clock_.time(); }
-  void set_time(double t) { clock_.set(t); }
-  void reset(const Belief& b) { belief_ = b; }
-
-  Status predict(const Input& u, double dt) { return eskf::predict(model_, belief_, u, dt, options_); }
-
-  Status predict_to(double t, const Input& u) {
-    double dt = 0.0;
-    if (Problem p = clock_.dt_to(t, dt); p != Problem::none) return Status::invalid(p);
-    Status s = predict(u, dt);
-    if (s) clock_.set(t);
-    return s;
-  }
-
-  template <class Meas>
-  Status update(const Meas& meas, const Vector<Meas::dim>& z) {
-    return eskf::update(model_, meas, belief_, z, gate_, options_);
-  }
-
- private:
-  Model model_;
-  Belief belief_;
-  FilterOptions options_;
-  Gate gate_;
-  FilterClock clock_;
+  using Base::Base;
+  const State& nominal() const { return this->belief().nominal; }
 };
 
 }  // namespace ctxfuse

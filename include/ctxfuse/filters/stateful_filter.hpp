@@ -1,0 +1,57 @@
+// The stateful wrapper shared by Ekf and Eskf: a belief, a clock, the options and the gate
+// around a set of stateless steps (`Steps::predict`, `Steps::update`), so that the timed API
+// and its out-of-order checks exist once.
+#pragma once
+
+#include <utility>
+
+#include "ctxfuse/core/status.hpp"
+#include "ctxfuse/core/types.hpp"
+#include "ctxfuse/core/validation.hpp"
+#include "ctxfuse/filters/filter_clock.hpp"
+
+namespace ctxfuse::detail {
+
+template <class Model, class Gate, class BeliefT, class Steps>
+class StatefulFilter {
+ public:
+  static constexpr int dim = Model::dim;
+  using Input = typename Model::Input;
+  using Belief = BeliefT;
+
+  StatefulFilter(Model model, Belief initial, FilterOptions options = {}, Gate gate = {})
+      : model_(std::move(model)), belief_(std::move(initial)), options_(options), gate_(std::move(gate)) {}
+
+  const Belief& belief() const { return belief_; }
+  const Model& model() const { return model_; }
+  const Gate& gate() const { return gate_; }
+  const FilterOptions& options() const { return options_; }
+  double time() const { return clock_.time(); }
+  void set_time(double t) { clock_.set(t); }
+  void reset(const Belief& b) { belief_ = b; }
+
+  Status predict(const Input& u, double dt) { return Steps::predict(model_, belief_, u, dt, options_); }
+
+  /// Predict from the filter time to `t`; out-of-order or unset time is rejected.
+  Status predict_to(double t, const Input& u) {
+    double dt = 0.0;
+    if (Problem p = clock_.dt_to(t, dt); p != Problem::none) return Status::invalid(p);
+    Status s = predict(u, dt);
+    if (s) clock_.set(t);
+    return s;
+  }
+
+  template <class Meas>
+  Status update(const Meas& meas, const Vector<Meas::dim>& z) {
+    return Steps::update(model_, meas, belief_, z, gate_, options_);
+  }
+
+ private:
+  Model model_;
+  Belief belief_;
+  FilterOptions options_;
+  Gate gate_;
+  FilterClock clock_;
+};
+
+}  // namespace ctxfuse::detail
