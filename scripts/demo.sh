@@ -12,14 +12,9 @@ jobs="$(ctxfuse_jobs)"
 
 ctxfuse_ensure_deps
 
-configure_args=(--preset "$preset")
-if [[ -n "${CTXFUSE_DATA_DIR:-}" ]]; then
-  configure_args+=("-DCTXFUSE_DATA_DIR=$CTXFUSE_DATA_DIR")
-fi
-
 cd "$repo"
 echo "== configure ($preset)" >&2
-cmake "${configure_args[@]}" >/dev/null
+ctxfuse_configure "$preset" >/dev/null
 echo "== build the ctxfuse tool" >&2
 cmake --build --preset "$preset" -j "$jobs" --target ctxfuse_cli
 

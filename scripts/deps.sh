@@ -51,3 +51,14 @@ ctxfuse_ensure_deps() {
 ctxfuse_jobs() {
   nproc 2>/dev/null || echo 2
 }
+
+# Configures a preset from the repository root. ctest hands tests the CTXFUSE_DATA_DIR cache
+# entry, not the caller's environment, so an explicit setting must reach the cache.
+ctxfuse_configure() {
+  local preset="$1"
+  local args=(--preset "$preset")
+  if [[ -n "${CTXFUSE_DATA_DIR:-}" ]]; then
+    args+=("-DCTXFUSE_DATA_DIR=$CTXFUSE_DATA_DIR")
+  fi
+  cmake "${args[@]}"
+}

@@ -13,15 +13,9 @@ jobs="$(ctxfuse_jobs)"
 
 ctxfuse_ensure_deps
 
-configure_args=(--preset "$preset")
-# ctest gives tests the cache entry, so an explicit setting must reach the cache.
-if [[ -n "${CTXFUSE_DATA_DIR:-}" ]]; then
-  configure_args+=("-DCTXFUSE_DATA_DIR=$CTXFUSE_DATA_DIR")
-fi
-
 cd "$repo"
 echo "== configure ($preset)"
-cmake "${configure_args[@]}"
+ctxfuse_configure "$preset"
 echo "== build ($preset, $jobs jobs)"
 cmake --build --preset "$preset" -j "$jobs"
 echo "== test ($preset, $jobs jobs)"
