@@ -158,6 +158,24 @@ void run_section(const DemoContext& ctx, Json& json, std::ostream& out) {
       << "; recognition joint > SVM > HMM: " << (order_recognition ? "holds" : "does NOT hold") << "\n";
   out << fmt("  overall improvement of region IMM over FKF %.1f %% (paper 43.75 %%), over IMM %.1f %% (paper 22.30 %%)\n",
              100.0 * (fkf - prop) / fkf, 100.0 * (imm - prop) / imm);
+  // What routing can act on: it keeps UWB from the sub-models outdoors and GNSS indoors, so
+  // it can only matter where the drive has UWB ranges outdoors or GNSS fixes indoors.
+  std::array<int, 3> epochs{}, uwb_epochs{}, fix_epochs{};
+  {
+    std::size_t w = 0;
+    for (const auto& e : test.gnss) {
+      const auto region = static_cast<std::size_t>(e.region);
+      ++epochs[region];
+      fix_epochs[region] += e.has_fix;
+      bool ranged = false;
+      for (; w < test.uwb.size() && test.uwb[w].t <= e.t + 1e-9; ++w) ranged |= test.uwb[w].t > e.t - 1.0 + 1e-9;
+      uwb_epochs[region] += ranged;
+    }
+  }
+  out << "  what routing can exclude: UWB ranges at " << uwb_epochs[0] << " of " << epochs[0]
+      << " outdoor epochs, GNSS fixes at " << fix_epochs[2] << " of " << epochs[2] << " indoor epochs\n";
+  json.set("routing.outdoor_epochs_with_uwb", uwb_epochs[0]);
+  json.set("routing.indoor_epochs_with_gnss_fix", fix_epochs[2]);
   json.set("ordering.overall_holds", order_overall);
   json.set("ordering.transition_holds", order_transition);
   json.set("ordering.recognition_holds", order_recognition);

@@ -36,6 +36,7 @@ enum class Problem : std::uint8_t {
   innovation_not_positive_definite,
   non_finite_covariance,
   non_finite_state,
+  covariance_not_positive_definite,  // a caller-supplied covariance (e.g. a reset) is not
 };
 
 constexpr std::string_view describe(Problem p) {
@@ -59,6 +60,7 @@ constexpr std::string_view describe(Problem p) {
     case Problem::innovation_not_positive_definite: return "innovation covariance is not positive definite";
     case Problem::non_finite_covariance: return "updated covariance contains NaN or Inf";
     case Problem::non_finite_state: return "updated state contains NaN or Inf";
+    case Problem::covariance_not_positive_definite: return "covariance is not positive definite";
   }
   return "unknown";
 }

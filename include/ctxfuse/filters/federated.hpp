@@ -119,6 +119,18 @@ class FederatedFilter {
     return ekf::update<N>(meas, locals_[static_cast<std::size_t>(i)], z, gate_, options_);
   }
 
+  /// Replaces the global estimate and resets the locals from it (P_i = P_g / beta_i), e.g. to
+  /// widen the covariance after a gate lock-out. Rejects (changes nothing) a belief that is
+  /// not finite or whose covariance is not positive definite.
+  Status reset(const Belief& global) {
+    if (!all_finite(global.mean)) return Status::invalid(Problem::non_finite_state);
+    if (!all_finite(global.cov)) return Status::invalid(Problem::non_finite_covariance);
+    if (!is_positive_definite(global.cov)) return Status::invalid(Problem::covariance_not_positive_definite);
+    global_ = global;
+    reset_locals();
+    return Status{};
+  }
+
   /// Fuses the local estimates into the global one and resets the locals from it. Returns
   /// false (nothing changed) when a covariance is not positive definite.
   bool fuse_and_reset() {
