@@ -171,7 +171,7 @@ struct Settings {
   double lateral_sigma = 0.1;         // [m/s] no-side-slip
   double iotr_noise_factor = 2.0;     // I-OTR's weighting of GNSS and UWB
   // Chi-square gate on every GNSS/UWB update. A tight gate keeps the NLOS ranges out (with
-  // 0.999999 they pulled EKF-I-OTR onto the mirror image of its track about the door anchors
+  // 0.999999 they pulled EKF-I-OTR onto the mirror image of its track about the approach anchors
   // on seed 4); the lock-out a tight gate risks after a stretch of dead reckoning (seed 2) is
   // handled by the per-source health below, not by loosening the gate.
   double gate_probability = 0.999;
