@@ -57,7 +57,7 @@ TEST(SourceHealth, RecoveredStartsANewCount) {
   SourceHealth h(SourceHealthOptions{1.0, 2});
   for (double t : {0.0, 0.5, 1.0, 1.5}) h.record(t, gated());
   ASSERT_TRUE(h.lockout(1.6));
-  h.recovered(1.6);
+  h.recovered();
   EXPECT_FALSE(h.lockout(1.7));
   h.record(1.8, gated());
   h.record(1.9, gated());
@@ -113,7 +113,7 @@ LockedRun run_locked_filter(bool with_recovery) {
       auto widened = f.belief();
       policies::widen_block<L, "p">(widened.cov, 5.0);
       f.reset(widened);
-      health.recovered(t);
+      health.recovered();
       ++out.recoveries;
     }
   }

@@ -290,8 +290,8 @@ struct FilterHealth {
   /// True (and the counts restarted) when either source is locked out at time t.
   bool lockout(double t) {
     if (!gnss.lockout(t) && !uwb.lockout(t)) return false;
-    gnss.recovered(t);
-    uwb.recovered(t);
+    gnss.recovered();
+    uwb.recovered();
     return true;
   }
 };

@@ -40,7 +40,6 @@ class SourceHealth {
   /// outcomes count: invalid input says nothing about the filter.
   void record(double t, const Status& s) {
     if (s.accepted()) {
-      last_accepted_t_ = t;
       rejections_ = 0;
       return;
     }
@@ -50,27 +49,21 @@ class SourceHealth {
   }
 
   /// True when the source has been locked out: an unbroken run of at least `min_rejections`
-  /// rejected measurements, none accepted, that started more than `timeout_s` ago (counted
-  /// from the later of the run's first rejection and the last recovery). A burst of
-  /// rejections after a long silence is therefore not yet a lock-out.
+  /// rejected measurements, none accepted, whose first rejection is more than `timeout_s` ago.
+  /// An acceptance or a recovery ends the run, so the run never starts before either. A burst
+  /// of rejections after a long silence is therefore not yet a lock-out.
   bool lockout(double t) const {
-    if (rejections_ < options_.min_rejections) return false;
-    const double since = last_accepted_t_ > first_rejection_t_ ? last_accepted_t_ : first_rejection_t_;
-    return t - since > options_.timeout_s;
+    return rejections_ >= options_.min_rejections && t - first_rejection_t_ > options_.timeout_s;
   }
 
   /// Starts a new count after the caller has recovered (widened the covariance).
-  void recovered(double t) {
-    rejections_ = 0;
-    last_accepted_t_ = t;
-  }
+  void recovered() { rejections_ = 0; }
 
   int rejections() const { return rejections_; }
   const SourceHealthOptions& options() const { return options_; }
 
  private:
   SourceHealthOptions options_;
-  double last_accepted_t_ = -std::numeric_limits<double>::infinity();
   double first_rejection_t_ = -std::numeric_limits<double>::infinity();
   int rejections_ = 0;
 };
