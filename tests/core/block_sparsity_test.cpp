@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <array>
+#include <limits>
 
 #include "ctxfuse/core/block_sparsity.hpp"
 #include "ctxfuse/filters/eskf.hpp"
@@ -107,6 +108,54 @@ TEST(BlockSparsity, SparseCongruenceEqualsDense) {
   const SquareMatrix<15> P = A * A.transpose();
   const SquareMatrix<15> dense = F * P * F.transpose();
   EXPECT_LT((congruence<models::Ins15Model::transition_blocks>(F, P) - dense).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+TEST(BlockSparsity, BlockDiagonalResetEqualsDenseCongruence) {
+  models::Ins15Model m;
+  Vector<15> dx = Vector<15>::Zero();
+  L::get<"theta">(dx) = Eigen::Vector3d(0.3, -0.2, 0.5);
+  const SquareMatrix<15> G = m.reset_jacobian(state(), dx);
+  SquareMatrix<15> A = SquareMatrix<15>::Random();
+  const SquareMatrix<15> P = A * A.transpose();
+  const Eigen::MatrixXd dense = Eigen::MatrixXd(G) * Eigen::MatrixXd(P) * Eigen::MatrixXd(G).transpose();
+  static_assert(is_block_diagonal(models::Ins15Model::reset_blocks));
+  static_assert(!is_block_diagonal(models::Ins15Model::transition_blocks));
+  // Only the lower triangle of the input is read: garbage above it must not matter.
+  SquareMatrix<15> lower = P;
+  lower.triangularView<Eigen::StrictlyUpper>().setConstant(std::numeric_limits<double>::quiet_NaN());
+  block_diagonal_congruence_lower_in_place<models::Ins15Model::reset_blocks>(G, lower);
+  for (int j = 0; j < 15; ++j)
+    for (int i = j; i < 15; ++i) EXPECT_NEAR(lower(i, j), dense(i, j), 1e-12) << i << "," << j;
+  // A diagonal-kind block (scaling) as well: the pattern of the bias decay in F.
+  static constexpr auto scaled = block_pattern<L>({{"p", "p", kIdentity}, {"v", "v", kIdentity}, {"theta", "theta"},
+                                                    {"bg", "bg", kDiagonal}, {"ba", "ba", kIdentity}});
+  SquareMatrix<15> G2 = G;
+  L::cov<"bg">(G2).diagonal() << 0.9, 0.8, 0.7;
+  const Eigen::MatrixXd dense2 = Eigen::MatrixXd(G2) * Eigen::MatrixXd(P) * Eigen::MatrixXd(G2).transpose();
+  SquareMatrix<15> lower2 = P;
+  block_diagonal_congruence_lower_in_place<scaled>(G2, lower2);
+  for (int j = 0; j < 15; ++j)
+    for (int i = j; i < 15; ++i) EXPECT_NEAR(lower2(i, j), dense2(i, j), 1e-12) << i << "," << j;
+}
+
+TEST(BlockSparsity, LowerCongruenceLeavesTheUpperTriangleAlone) {
+  models::Ins15Model m;
+  models::ImuSample u;
+  u.gyro = {0.2, -0.1, 0.4};
+  u.accel = {1, 2, 9};
+  SquareMatrix<15> F;
+  m.predict(state(), u, 0.05, &F);
+  SquareMatrix<15> A = SquareMatrix<15>::Random();
+  const SquareMatrix<15> P = A * A.transpose();
+  const Eigen::MatrixXd dense = Eigen::MatrixXd(F) * Eigen::MatrixXd(P) * Eigen::MatrixXd(F).transpose();
+  SquareMatrix<15> out = SquareMatrix<15>::Constant(-7.0);
+  congruence_lower<models::Ins15Model::transition_blocks>(F, P, out);
+  for (int j = 0; j < 15; ++j)
+    for (int i = 0; i < 15; ++i) {
+      // Block-lower: rows of a block at or below the block of the column are computed.
+      if (i / 3 >= j / 3) EXPECT_NEAR(out(i, j), dense(i, j), 1e-12) << i << "," << j;
+      else EXPECT_EQ(out(i, j), -7.0) << i << "," << j;
+    }
 }
 
 // The same model without its patterns: the filter must give the same answer either way.

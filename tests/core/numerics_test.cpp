@@ -2,6 +2,8 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <cstdlib>
+#include <limits>
 #include <numbers>
 
 #include "ctxfuse/core/numerics.hpp"
@@ -67,6 +69,68 @@ TEST(Numerics, InnovationSolveGivesNisAndGaussianLogLikelihood) {
   EXPECT_FALSE(InnovationSolve<3>(indefinite).ok);
   EXPECT_FALSE(is_positive_definite(indefinite));
   EXPECT_TRUE(is_positive_definite(S));
+}
+
+// Plain dynamic-size references, written out from the definitions.
+Eigen::MatrixXd random_spd(int n, unsigned seed) {
+  std::srand(seed);
+  const Eigen::MatrixXd A = Eigen::MatrixXd::Random(n, n);
+  return A * A.transpose() + 0.5 * Eigen::MatrixXd::Identity(n, n);
+}
+
+TEST(Numerics, FusedJosephEqualsTextbookJosephForAnyGain) {
+  constexpr int N = 15, M = 3;
+  const Eigen::MatrixXd P = random_spd(N, 7);
+  std::srand(11);
+  const Eigen::MatrixXd H = Eigen::MatrixXd::Random(M, N);
+  const Eigen::MatrixXd R = random_spd(M, 13);
+  const Eigen::MatrixXd S = H * P * H.transpose() + R;
+  const Eigen::MatrixXd K_opt = P * H.transpose() * S.inverse();
+  for (const double scale : {1.0, 0.6, 1.9}) {
+    // Off-optimal gains too (scaled, and perturbed so that K S - P H' has no special form).
+    Eigen::MatrixXd K = scale * K_opt;
+    K(4, 1) += 0.05 * (scale - 1.0);
+    const Eigen::MatrixXd I_KH = Eigen::MatrixXd::Identity(N, N) - K * H;
+    const Eigen::MatrixXd expected = I_KH * P * I_KH.transpose() + K * R * K.transpose();
+    const SquareMatrix<N> got = joseph_update_expanded<N, M>(SquareMatrix<N>(P), Matrix<N, M>(K),
+                                                             Matrix<N, M>(P * H.transpose()), SquareMatrix<M>(S));
+    EXPECT_LT((got - expected).cwiseAbs().maxCoeff(), 1e-12) << "gain scale " << scale;
+    EXPECT_EQ(got, got.transpose());
+
+    // The lower-only form writes nothing above the diagonal.
+    SquareMatrix<N> lower = SquareMatrix<N>::Constant(-123.0);
+    joseph_update_expanded_lower<N, M>(SquareMatrix<N>(P), Matrix<N, M>(K), Matrix<N, M>(P * H.transpose()),
+                                       SquareMatrix<M>(S), lower);
+    for (int j = 0; j < N; ++j)
+      for (int i = 0; i < N; ++i) {
+        if (i < j) EXPECT_EQ(lower(i, j), -123.0);
+        else EXPECT_NEAR(lower(i, j), expected(i, j), 1e-12);
+      }
+  }
+}
+
+TEST(Numerics, CholeskyGainEqualsExplicitInverse) {
+  constexpr int N = 15;
+  const Eigen::MatrixXd S3 = random_spd(3, 17);
+  std::srand(19);
+  const Eigen::MatrixXd B = Eigen::MatrixXd::Random(N, 3);
+  const InnovationSolve<3> solve3{SquareMatrix<3>(S3)};
+  ASSERT_TRUE(solve3.ok);
+  EXPECT_LT((solve3.right_solve<N>(Matrix<N, 3>(B)) - B * S3.inverse()).cwiseAbs().maxCoeff(), 1e-12);
+  // L L' reproduces S, and L is lower triangular.
+  EXPECT_LT((solve3.L * solve3.L.transpose() - S3).cwiseAbs().maxCoeff(), 1e-13);
+  EXPECT_EQ(solve3.L(0, 1), 0.0);
+  EXPECT_EQ(solve3.L(0, 2), 0.0);
+  EXPECT_EQ(solve3.L(1, 2), 0.0);
+  const InnovationSolve<1> solve1{SquareMatrix<1>(0.09)};
+  ASSERT_TRUE(solve1.ok);
+  EXPECT_LT((solve1.right_solve<N>(Matrix<N, 1>(B.col(0))) - B.col(0) / 0.09).cwiseAbs().maxCoeff(), 1e-12);
+  // Non-finite or non-positive pivots fail.
+  SquareMatrix<3> bad = SquareMatrix<3>(S3);
+  bad(2, 1) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(InnovationSolve<3>(bad).ok);
+  EXPECT_FALSE(InnovationSolve<1>(SquareMatrix<1>(0.0)).ok);
+  EXPECT_FALSE(InnovationSolve<1>(SquareMatrix<1>(std::numeric_limits<double>::infinity())).ok);
 }
 
 TEST(Numerics, SymmetrizeMirrorsTheLowerTriangle) {

@@ -18,6 +18,7 @@
 #include <utility>
 
 #include "ctxfuse/core/layout.hpp"
+#include "ctxfuse/core/numerics.hpp"
 #include "ctxfuse/core/types.hpp"
 
 namespace ctxfuse {
@@ -81,15 +82,33 @@ constexpr ColumnPattern<L, K> column_pattern(const std::string_view (&names)[K])
 }
 
 namespace detail {
-template <std::size_t... I, class F>
-constexpr void static_for_impl(std::index_sequence<I...>, F&& f) {
-  (f(std::integral_constant<std::size_t, I>{}), ...);
+template <auto Pat>
+constexpr auto first_block_in_row() {
+  std::array<bool, decltype(Pat)::size> first{};
+  for (std::size_t k = 0; k < first.size(); ++k) {
+    first[k] = true;
+    for (std::size_t j = 0; j < k; ++j)
+      if (Pat.row[j] == Pat.row[k]) first[k] = false;
+  }
+  return first;
 }
-template <std::size_t N, class F>
-constexpr void static_for(F&& f) {
-  static_for_impl(std::make_index_sequence<N>{}, std::forward<F>(f));
+template <auto Pat>
+constexpr auto block_rows_with_blocks() {
+  using L = typename decltype(Pat)::layout;
+  std::array<bool, L::names.size()> has{};
+  for (std::size_t k = 0; k < decltype(Pat)::size; ++k) has[static_cast<std::size_t>(Pat.row[k])] = true;
+  return has;
 }
 }  // namespace detail
+
+/// True when every block of the pattern sits on the block diagonal (e.g. a reset Jacobian that
+/// only touches the attitude block).
+template <class P>
+constexpr bool is_block_diagonal(const P& pat) {
+  for (std::size_t k = 0; k < P::size; ++k)
+    if (pat.row[k] != pat.col[k]) return false;
+  return true;
+}
 
 /// out = A B for a square A with block pattern `Pat` (zero elsewhere) and any B with A's rows.
 template <auto Pat, class DerivedA, class DerivedB, class DerivedOut>
@@ -98,20 +117,8 @@ void block_sparse_product(const Eigen::MatrixBase<DerivedA>& A, const Eigen::Mat
   using L = typename decltype(Pat)::layout;
   // The first block of each block row assigns, later ones accumulate, and block rows with no
   // block are zeroed: no pass over the whole output is wasted on zeros.
-  static constexpr auto first_in_row = [] {
-    std::array<bool, decltype(Pat)::size> first{};
-    for (std::size_t k = 0; k < first.size(); ++k) {
-      first[k] = true;
-      for (std::size_t j = 0; j < k; ++j)
-        if (Pat.row[j] == Pat.row[k]) first[k] = false;
-    }
-    return first;
-  }();
-  [[maybe_unused]] static constexpr auto row_has_block = [] {
-    std::array<bool, L::names.size()> has{};
-    for (std::size_t k = 0; k < decltype(Pat)::size; ++k) has[static_cast<std::size_t>(Pat.row[k])] = true;
-    return has;
-  }();
+  static constexpr auto first_in_row = detail::first_block_in_row<Pat>();
+  [[maybe_unused]] static constexpr auto row_has_block = detail::block_rows_with_blocks<Pat>();
   detail::static_for<L::names.size()>([&](auto rb) {
     if constexpr (!row_has_block[rb]) out.template middleRows<L::sizes[rb]>(L::offsets[rb]).setZero();
   });
@@ -127,8 +134,10 @@ void block_sparse_product(const Eigen::MatrixBase<DerivedA>& A, const Eigen::Mat
       const auto d = A.template block<rs, cs>(r0, c0).diagonal().asDiagonal();
       if constexpr (first_in_row[k]) dst.noalias() = d * src; else dst.noalias() += d * src;
     } else {
+      // lazyProduct: a 3x3 block times a 3x15 slice is past Eigen's size threshold for
+      // coefficient-based products and would otherwise go through its blocked GEMM.
       const auto a = A.template block<rs, cs>(r0, c0);
-      if constexpr (first_in_row[k]) dst.noalias() = a * src; else dst.noalias() += a * src;
+      if constexpr (first_in_row[k]) dst.noalias() = a.lazyProduct(src); else dst.noalias() += a.lazyProduct(src);
     }
   });
 }
@@ -137,12 +146,14 @@ void block_sparse_product(const Eigen::MatrixBase<DerivedA>& A, const Eigen::Mat
 template <auto Pat, int N, int M>
 Matrix<N, M> times_transpose_columns(const SquareMatrix<N>& P, const Matrix<M, N>& H) {
   using L = typename decltype(Pat)::layout;
-  Matrix<N, M> out = Matrix<N, M>::Zero();
+  Matrix<N, M> out;
   detail::static_for<decltype(Pat)::size>([&](auto k) {
     constexpr std::size_t b = static_cast<std::size_t>(Pat.block[k]);
     constexpr int o = L::offsets[b], s = L::sizes[b];
-    out.noalias() += P.template middleCols<s>(o) * H.template middleCols<s>(o).transpose();
+    const auto term = P.template middleCols<s>(o).lazyProduct(H.template middleCols<s>(o).transpose());
+    if constexpr (decltype(k)::value == 0) out.noalias() = term; else out.noalias() += term;
   });
+  if constexpr (decltype(Pat)::size == 0) out.setZero();
   return out;
 }
 
@@ -150,22 +161,118 @@ Matrix<N, M> times_transpose_columns(const SquareMatrix<N>& P, const Matrix<M, N
 template <auto Pat, int M, int N, int C>
 Matrix<M, C> columns_times(const Matrix<M, N>& H, const Matrix<N, C>& X) {
   using L = typename decltype(Pat)::layout;
-  Matrix<M, C> out = Matrix<M, C>::Zero();
+  Matrix<M, C> out;
   detail::static_for<decltype(Pat)::size>([&](auto k) {
     constexpr std::size_t b = static_cast<std::size_t>(Pat.block[k]);
     constexpr int o = L::offsets[b], s = L::sizes[b];
-    out.noalias() += H.template middleCols<s>(o) * X.template middleRows<s>(o);
+    const auto term = H.template middleCols<s>(o).lazyProduct(X.template middleRows<s>(o));
+    if constexpr (decltype(k)::value == 0) out.noalias() = term; else out.noalias() += term;
   });
+  if constexpr (decltype(Pat)::size == 0) out.setZero();
   return out;
 }
 
-/// A P A' for a square A with block pattern `Pat`: two block-sparse products, (A (A P)')'.
+/// The block-lower part of A P A' (every block (r, c) of the layout with r >= c, diagonal
+/// blocks whole) for a square A with block pattern `Pat` and a symmetric P; blocks above the
+/// block diagonal are left as they were. Two passes:
+///   T = P A'  by block columns (P's columns are contiguous, so these are long axpys), then
+///   A T       by block rows, each only as far as the block diagonal.
+/// About 30 % fewer multiplications than both full products for the 15-state INS, and the
+/// upper half is a mirror (symmetrize) away.
+template <auto Pat, int N>
+void congruence_lower(const SquareMatrix<N>& A, const SquareMatrix<N>& P, SquareMatrix<N>& out) {
+  using L = typename decltype(Pat)::layout;
+  static_assert(L::size == N);
+  static constexpr auto first_in_row = detail::first_block_in_row<Pat>();
+  [[maybe_unused]] static constexpr auto row_has_block = detail::block_rows_with_blocks<Pat>();
+  SquareMatrix<N> T;
+  detail::static_for<L::names.size()>([&](auto rb) {
+    if constexpr (!row_has_block[rb]) T.template middleCols<L::sizes[rb]>(L::offsets[rb]).setZero();
+  });
+  // T_{:, r} = sum over blocks (r, c) of A of P_{:, c} A_{rc}'
+  detail::static_for<decltype(Pat)::size>([&](auto k) {
+    constexpr std::size_t rb = static_cast<std::size_t>(Pat.row[k]);
+    constexpr std::size_t cb = static_cast<std::size_t>(Pat.col[k]);
+    constexpr int r0 = L::offsets[rb], rs = L::sizes[rb], c0 = L::offsets[cb], cs = L::sizes[cb];
+    auto dst = T.template middleCols<rs>(r0);
+    const auto src = P.template middleCols<cs>(c0);
+    if constexpr (Pat.kind[k] == BlockKind::identity) {
+      if constexpr (first_in_row[k]) dst = src; else dst += src;
+    } else if constexpr (Pat.kind[k] == BlockKind::diagonal) {
+      const auto d = A.template block<rs, cs>(r0, c0).diagonal().asDiagonal();
+      if constexpr (first_in_row[k]) dst.noalias() = src * d; else dst.noalias() += src * d;
+    } else {
+      const auto at = A.template block<rs, cs>(r0, c0).transpose();
+      if constexpr (first_in_row[k]) dst.noalias() = src.lazyProduct(at); else dst.noalias() += src.lazyProduct(at);
+    }
+  });
+  detail::static_for<L::names.size()>([&](auto rb) {
+    if constexpr (!row_has_block[rb])
+      out.template block<L::sizes[rb], L::offsets[rb] + L::sizes[rb]>(L::offsets[rb], 0).setZero();
+  });
+  // (A T)_{r, 0..r} = sum over blocks (r, c) of A of A_{rc} T_{c, 0..r}
+  detail::static_for<decltype(Pat)::size>([&](auto k) {
+    constexpr std::size_t rb = static_cast<std::size_t>(Pat.row[k]);
+    constexpr std::size_t cb = static_cast<std::size_t>(Pat.col[k]);
+    constexpr int r0 = L::offsets[rb], rs = L::sizes[rb], c0 = L::offsets[cb], cs = L::sizes[cb];
+    constexpr int width = r0 + rs;
+    auto dst = out.template block<rs, width>(r0, 0);
+    const auto src = T.template block<cs, width>(c0, 0);
+    if constexpr (Pat.kind[k] == BlockKind::identity) {
+      if constexpr (first_in_row[k]) dst = src; else dst += src;
+    } else if constexpr (Pat.kind[k] == BlockKind::diagonal) {
+      const auto d = A.template block<rs, cs>(r0, c0).diagonal().asDiagonal();
+      if constexpr (first_in_row[k]) dst.noalias() = d * src; else dst.noalias() += d * src;
+    } else {
+      const auto a = A.template block<rs, cs>(r0, c0);
+      if constexpr (first_in_row[k]) dst.noalias() = a.lazyProduct(src); else dst.noalias() += a.lazyProduct(src);
+    }
+  });
+}
+
+/// A P A' for a square A with block pattern `Pat` and a symmetric P.
 template <auto Pat, int N>
 SquareMatrix<N> congruence(const SquareMatrix<N>& A, const SquareMatrix<N>& P) {
-  SquareMatrix<N> AP, APAt;
-  block_sparse_product<Pat>(A, P, AP);
-  block_sparse_product<Pat>(A, AP.transpose(), APAt);  // A (A P)' = A P' A' = A P A' (P symmetric)
-  return APAt;
+  SquareMatrix<N> out;
+  congruence_lower<Pat>(A, P, out);
+  symmetrize(out);
+  return out;
+}
+
+/// The lower triangle of A P A' in place, for a block-diagonal pattern, reading only the lower
+/// triangle of the symmetric P (so a covariance that is only valid below its diagonal needs
+/// no mirroring first). Block (r, c), r >= c, of the result is A_r P_rc A_c'; for each
+/// non-identity diagonal block b that is A_b times the part of block row b left of the
+/// diagonal block, the part of block column b below it times A_b', and A_b P_bb A_b' for the
+/// diagonal block itself. The strict upper triangle is left unspecified.
+template <auto Pat, int N>
+void block_diagonal_congruence_lower_in_place(const SquareMatrix<N>& A, SquareMatrix<N>& P) {
+  using L = typename decltype(Pat)::layout;
+  static_assert(L::size == N);
+  static_assert(is_block_diagonal(Pat), "block_diagonal_congruence_lower_in_place needs a block-diagonal pattern");
+  detail::static_for<decltype(Pat)::size>([&](auto k) {
+    constexpr std::size_t b = static_cast<std::size_t>(Pat.row[k]);
+    constexpr int o = L::offsets[b], s = L::sizes[b], below = N - o - s;
+    if constexpr (Pat.kind[k] == BlockKind::diagonal) {
+      const auto d = A.template block<s, s>(o, o).diagonal().asDiagonal();
+      P.template block<s, o + s>(o, 0) = d * P.template block<s, o + s>(o, 0);
+      P.template block<below + s, s>(o, o) = P.template block<below + s, s>(o, o) * d;
+    } else if constexpr (Pat.kind[k] == BlockKind::dense) {
+      const auto a = A.template block<s, s>(o, o);
+      if constexpr (o > 0) {
+        const Matrix<s, o> left = a.lazyProduct(P.template block<s, o>(o, 0));
+        P.template block<s, o>(o, 0) = left;
+      }
+      if constexpr (below > 0) {
+        const Matrix<below, s> under = P.template block<below, s>(o + s, o).lazyProduct(a.transpose());
+        P.template block<below, s>(o + s, o) = under;
+      }
+      SquareMatrix<s> diag = P.template block<s, s>(o, o);
+      symmetrize(diag);
+      const SquareMatrix<s> a_diag = a.lazyProduct(diag);
+      P.template block<s, s>(o, o).noalias() = a_diag.lazyProduct(a.transpose());
+    }
+  });
 }
 
 }  // namespace ctxfuse

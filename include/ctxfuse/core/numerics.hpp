@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <type_traits>
+#include <utility>
 
 #include "ctxfuse/core/types.hpp"
 
@@ -23,7 +25,15 @@ bool all_finite(const Eigen::DenseBase<Derived>& m) {
 /// them would buy nothing and cost three times as much (strided reads of both triangles).
 template <class Derived>
 void symmetrize(Eigen::MatrixBase<Derived>& P) {
-  P.template triangularView<Eigen::StrictlyUpper>() = P.transpose();
+  constexpr int n = Derived::RowsAtCompileTime;
+  if constexpr (n != Eigen::Dynamic && n == Derived::ColsAtCompileTime) {
+    // Plain loops with compile-time bounds: about half the instructions of Eigen's
+    // triangular-view assignment for a 15x15.
+    for (int j = 1; j < n; ++j)
+      for (int i = 0; i < j; ++i) P.coeffRef(i, j) = P.coeff(j, i);
+  } else {
+    P.template triangularView<Eigen::StrictlyUpper>() = P.transpose();
+  }
 }
 
 /// Joseph form P+ = (I - K H) P (I - K H)' + K R K'. Symmetric and positive semi-definite for
@@ -39,49 +49,138 @@ SquareMatrix<N> joseph_update(const SquareMatrix<N>& P, const Matrix<N, M>& K, c
   return out;
 }
 
+namespace detail {
+template <std::size_t... I, class F>
+constexpr void static_for_impl(std::index_sequence<I...>, F&& f) {
+  (f(std::integral_constant<std::size_t, I>{}), ...);
+}
+/// f(integral_constant<0>), ..., f(integral_constant<Count - 1>): compile-time offsets and
+/// sizes in the loop body, so every block expression below has fixed dimensions.
+template <std::size_t Count, class F>
+constexpr void static_for(F&& f) {
+  static_for_impl(std::make_index_sequence<Count>{}, std::forward<F>(f));
+}
+
+}  // namespace detail
+
+/// out = P - A B' on the lower triangle (diagonal included); the strict upper triangle of
+/// `out` is left as it was. A and B are N x K with small K. Plain loops, two rows at a time
+/// with the K-term sums in registers (compilers turn each pair into one SIMD lane pair):
+/// about a third of the instructions of Eigen's coefficient-based product of the same shape,
+/// whose default product path (blocked GEMM) costs more still.
+template <int N, int K>
+void lower_minus_product(const SquareMatrix<N>& P, const Matrix<N, K>& A, const Matrix<N, K>& B,
+                         SquareMatrix<N>& out) {
+  const double* a = A.data();
+  for (int j = 0; j < N; ++j) {
+    double b[K];
+    for (int k = 0; k < K; ++k) b[k] = B(j, k);
+    const double* p = P.data() + j * N;
+    double* o = out.data() + j * N;
+    int i = j;
+    for (; i + 1 < N; i += 2) {
+      double s0 = p[i], s1 = p[i + 1];
+      for (int k = 0; k < K; ++k) {
+        s0 -= a[k * N + i] * b[k];
+        s1 -= a[k * N + i + 1] * b[k];
+      }
+      o[i] = s0;
+      o[i + 1] = s1;
+    }
+    if (i < N) {
+      double s = p[i];
+      for (int k = 0; k < K; ++k) s -= a[k * N + i] * b[k];
+      o[i] = s;
+    }
+  }
+}
+
+/// out += Q on the lower triangle.
+template <int N>
+void add_lower(SquareMatrix<N>& out, const SquareMatrix<N>& Q) {
+  for (int j = 0; j < N; ++j)
+    for (int i = j; i < N; ++i) out(i, j) += Q(i, j);
+}
+
 /// The Joseph form expanded: with S = H P H' + R and PHt = P H',
 ///   (I - K H) P (I - K H)' + K R K' = P - K PHt' - PHt K' + K S K'
 /// holds exactly for ANY gain K, so this keeps the Joseph form's first-order insensitivity to
 /// gain errors while costing O(N^2 M) instead of the O(N^3) of multiplying out (I - K H).
 /// (What it does not keep is the congruence structure, which guarantees semi-definiteness
 /// under rounding; joseph_update above keeps it, at N^3.)
-/// The result is symmetric up to rounding; callers symmetrise once, after any reset.
+/// Computed as one rank-2M product, P - [K, U] [PHt, -K]' with U = K S - PHt (expand it: the
+/// same four terms), in one pass over the LOWER triangle of `out` only: the strict upper
+/// triangle is left unspecified (callers mirror it once, after any reset, with symmetrize).
+template <int N, int M>
+void joseph_update_expanded_lower(const SquareMatrix<N>& P, const Matrix<N, M>& K, const Matrix<N, M>& PHt,
+                                  const SquareMatrix<M>& S, SquareMatrix<N>& out) {
+  Matrix<N, 2 * M> left, right;
+  left.template leftCols<M>() = K;
+  left.template rightCols<M>().noalias() = K.lazyProduct(S);
+  left.template rightCols<M>() -= PHt;
+  right.template leftCols<M>() = PHt;
+  right.template rightCols<M>() = -K;
+  lower_minus_product<N, 2 * M>(P, left, right, out);
+}
+
+/// The same, as a full symmetric matrix.
 template <int N, int M>
 SquareMatrix<N> joseph_update_expanded(const SquareMatrix<N>& P, const Matrix<N, M>& K, const Matrix<N, M>& PHt,
                                        const SquareMatrix<M>& S) {
-  // Rank-M outer products: coefficient-based (lazy) products beat Eigen's blocked GEMM path
-  // by a wide margin at these sizes, and allocate nothing either way.
-  const SquareMatrix<N> K_PHt = K.lazyProduct(PHt.transpose());
-  const Matrix<N, M> KS = K * S;
-  SquareMatrix<N> out = P;
-  out -= K_PHt;
-  out -= K_PHt.transpose();
-  out += KS.lazyProduct(K.transpose());
+  SquareMatrix<N> out;
+  joseph_update_expanded_lower<N, M>(P, K, PHt, S, out);
+  symmetrize(out);
   return out;
+}
+
+/// Lower Cholesky factor L (A = L L') of a small fixed-size matrix, from A's lower triangle.
+/// Plain loops over compile-time bounds, which the compiler unrolls: Eigen's LLT runs its
+/// dynamic-size blocked kernel even for a 3x3. False when a pivot is not positive and finite
+/// (NaN anywhere in the lower triangle reaches a pivot); L is then unspecified.
+template <int M>
+bool cholesky_lower(const SquareMatrix<M>& A, SquareMatrix<M>& L) {
+  for (int j = 0; j < M; ++j) {
+    double d = A(j, j);
+    for (int k = 0; k < j; ++k) d -= L(j, k) * L(j, k);
+    // NaN fails the comparison; +Inf fails the finiteness test.
+    if (!(d > 0.0) || !(d < std::numeric_limits<double>::infinity())) return false;
+    const double ljj = std::sqrt(d);
+    const double inv = 1.0 / ljj;
+    L(j, j) = ljj;
+    for (int i = j + 1; i < M; ++i) {
+      double s = A(i, j);
+      for (int k = 0; k < j; ++k) s -= L(i, k) * L(j, k);
+      L(i, j) = s * inv;
+    }
+    for (int i = 0; i < j; ++i) L(i, j) = 0.0;
+  }
+  return true;
 }
 
 /// Cholesky factorisation of an innovation covariance S with what the update needs from it.
 template <int M>
 struct InnovationSolve {
-  Eigen::LLT<SquareMatrix<M>> llt;
+  SquareMatrix<M> L;  // S = L L', lower triangular
   bool ok = false;
 
-  explicit InnovationSolve(const SquareMatrix<M>& S) : llt(S) {
-    ok = llt.info() == Eigen::Success;
-    if (ok) {
-      // LLT "succeeds" on some indefinite inputs that round to a tiny positive pivot;
-      // a non-positive or non-finite diagonal of L is a failure all the same.
-      const auto d = llt.matrixLLT().diagonal();
-      ok = d.allFinite() && (d.array() > 0.0).all();
-    }
-  }
+  explicit InnovationSolve(const SquareMatrix<M>& S) { ok = cholesky_lower<M>(S, L); }
 
+  /// L^-1 y (forward substitution): its squared norm is the NIS.
+  Vector<M> whiten(const Vector<M>& y) const {
+    Vector<M> w;
+    for (int i = 0; i < M; ++i) {
+      double s = y(i);
+      for (int k = 0; k < i; ++k) s -= L(i, k) * w(k);
+      w(i) = s / L(i, i);
+    }
+    return w;
+  }
   /// y' S^-1 y
-  double nis(const Vector<M>& y) const { return y.dot(llt.solve(y)); }
+  double nis(const Vector<M>& y) const { return whiten(y).squaredNorm(); }
   double log_det() const {
     // One logarithm of the product of the pivots; the sum of logs only when the product
     // leaves the double range (it cannot for innovation covariances of sane units).
-    const auto d = llt.matrixLLT().diagonal();
+    const auto d = L.diagonal();
     const double prod = d.prod();
     if (prod > 1e-150 && prod < 1e150) return 2.0 * std::log(prod);
     return 2.0 * d.array().log().sum();
@@ -90,16 +189,39 @@ struct InnovationSolve {
   double log_likelihood(double nis_value) const {
     return -0.5 * (nis_value + log_det() + M * std::log(2.0 * std::numbers::pi));
   }
+  /// K = B S^-1 (e.g. the gain P H' S^-1) by two triangular solves on the columns of B:
+  /// W L' = B forwards, then K L = W backwards. Each step is a length-N axpy, no inverse.
+  template <int N>
+  Matrix<N, M> right_solve(const Matrix<N, M>& B) const {
+    Matrix<N, M> K;
+    for (int c = 0; c < M; ++c) {
+      K.col(c) = B.col(c);
+      for (int k = 0; k < c; ++k) K.col(c) -= L(c, k) * K.col(k);
+      K.col(c) *= 1.0 / L(c, c);
+    }
+    for (int c = M - 1; c >= 0; --c) {
+      for (int k = c + 1; k < M; ++k) K.col(c) -= L(k, c) * K.col(k);
+      K.col(c) *= 1.0 / L(c, c);
+    }
+    return K;
+  }
 };
 
 /// Positive definiteness through a Cholesky attempt (the cheapest complete test).
 template <class Derived>
 bool is_positive_definite(const Eigen::MatrixBase<Derived>& A) {
-  using Mat = Eigen::Matrix<typename Derived::Scalar, Derived::RowsAtCompileTime, Derived::ColsAtCompileTime>;
-  Eigen::LLT<Mat> llt(A.derived());
-  if (llt.info() != Eigen::Success) return false;
-  const auto d = llt.matrixLLT().diagonal();
-  return d.allFinite() && (d.array() > 0.0).all();
+  constexpr int rows = Derived::RowsAtCompileTime;
+  if constexpr (std::is_same_v<typename Derived::Scalar, double> && rows != Eigen::Dynamic &&
+                rows == Derived::ColsAtCompileTime && rows <= 6) {
+    SquareMatrix<rows> L;
+    return cholesky_lower<rows>(A, L);
+  } else {
+    using Mat = Eigen::Matrix<typename Derived::Scalar, Derived::RowsAtCompileTime, Derived::ColsAtCompileTime>;
+    Eigen::LLT<Mat> llt(A.derived());
+    if (llt.info() != Eigen::Success) return false;
+    const auto d = llt.matrixLLT().diagonal();
+    return d.allFinite() && (d.array() > 0.0).all();
+  }
 }
 
 namespace detail {

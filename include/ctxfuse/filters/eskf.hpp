@@ -30,33 +30,45 @@ bool nominal_is_finite(const Model& model, const typename Model::State& x) {
 }
 }  // namespace detail
 
-/// Nominal propagation and error covariance prediction P+ = F P F' + Q.
+namespace detail {
+/// The prediction from `in` into `out`, which may not alias `in`; `out` is scratch that holds
+/// the predicted belief only when the status is accepted (an IMM predicts all its modes this
+/// way and commits them together).
 template <ErrorStateProcessModel Model>
-Status predict(const Model& model, Belief<Model>& belief, const typename Model::Input& u, double dt,
-               const FilterOptions& opts = {}, SquareMatrix<Model::dim>* F_used = nullptr) {
+Status predict_into(const Model& model, const Belief<Model>& in, Belief<Model>& out, const typename Model::Input& u,
+                    double dt, const FilterOptions& opts, SquareMatrix<Model::dim>* F_used) {
   constexpr int N = Model::dim;
   if (Problem p = check_dt(dt, opts); p != Problem::none) return Status::invalid(p);
   if (Problem p = check_input(u, opts); p != Problem::none) return Status::invalid(p);
   if (Problem p = ctxfuse::detail::model_input_check(model, u); p != Problem::none) return Status::invalid(p);
 
-  const SquareMatrix<N> Q = model.noise(belief.nominal, u, dt);
+  const SquareMatrix<N> Q = model.noise(in.nominal, u, dt);
   if (Problem p = check_process_noise(Q); p != Problem::none) return Status::invalid(p);
 
   SquareMatrix<N> F;
-  typename Model::State x = model.predict(belief.nominal, u, dt, &F);
-  if (!detail::nominal_is_finite(model, x)) return Status::failure(Problem::non_finite_prediction);
-  SquareMatrix<N> P = ctxfuse::detail::propagate_covariance<Model>(F, belief.cov);
-  P += Q;
-  if (!all_finite(P)) {
+  out.nominal = model.predict(in.nominal, u, dt, &F);
+  if (!nominal_is_finite(model, out.nominal)) return Status::failure(Problem::non_finite_prediction);
+  // Lower triangle of F P F' + Q, mirrored once.
+  ctxfuse::detail::propagate_covariance_lower<Model>(F, in.cov, out.cov);
+  add_lower(out.cov, Q);
+  symmetrize(out.cov);
+  if (!all_finite(out.cov)) {
     const Problem p = diagnose_non_finite_prediction(Q, F);
     return p == Problem::process_noise_non_finite ? Status::invalid(p) : Status::failure(p);
   }
-  symmetrize(P);
-
-  belief.nominal = std::move(x);
-  belief.cov = P;
   if (F_used) *F_used = F;
   return Status{};
+}
+}  // namespace detail
+
+/// Nominal propagation and error covariance prediction P+ = F P F' + Q.
+template <ErrorStateProcessModel Model>
+Status predict(const Model& model, Belief<Model>& belief, const typename Model::Input& u, double dt,
+               const FilterOptions& opts = {}, SquareMatrix<Model::dim>* F_used = nullptr) {
+  Belief<Model> next;
+  const Status s = detail::predict_into(model, belief, next, u, dt, opts, F_used);
+  if (s.accepted()) belief = next;
+  return s;
 }
 
 /// Correction, injection and reset. `dx_applied`, when given, receives the injected error.
@@ -74,6 +86,7 @@ Status update(const Model& model, const Meas& meas, Belief<Model>& belief, const
   const Vector<M> z_pred = meas.predict(belief.nominal, &H);
   const Vector<M> y = ctxfuse::detail::innovation(meas, z, z_pred);
 
+  // The one output buffer: the belief is written only once everything has succeeded.
   Vector<N> dx;
   SquareMatrix<N> P;
   Status status = ctxfuse::detail::kalman_correction<Meas, N, M>(belief.cov, H, y, R, gate, dx, P);
@@ -83,7 +96,7 @@ Status update(const Model& model, const Meas& meas, Belief<Model>& belief, const
   if (!detail::nominal_is_finite(model, x)) return Status::failure(Problem::non_finite_state);
   if constexpr (requires { { model.reset_jacobian(belief.nominal, dx) } -> std::convertible_to<SquareMatrix<N>>; }) {
     const SquareMatrix<N> G = model.reset_jacobian(belief.nominal, dx);
-    P = ctxfuse::detail::reset_covariance<Model>(G, P);
+    ctxfuse::detail::reset_covariance_lower_in_place<Model>(G, P);
   }
   if (!ctxfuse::detail::finish_covariance(P)) return Status::failure(Problem::non_finite_covariance);
   belief.nominal = std::move(x);

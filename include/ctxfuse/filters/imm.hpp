@@ -212,28 +212,26 @@ class Imm {
 
     const int ref = most_probable();
     const State ref_point = point_of(ref);
-    std::array<Vector<N>, R> dx;
+    Matrix<N, R> dx;
+    std::array<const SquareMatrix<N>*, R> covs;
     hana::for_each(indices(), [&](auto i) {
-      dx[i] = state_difference(model_of(i), detail::point(beliefs_[i]), ref_point);
+      dx.col(decltype(i)::value) = state_difference(model_of(i), detail::point(beliefs_[i]), ref_point);
+      covs[i] = &beliefs_[i].cov;
     });
-    std::array<SquareMatrix<N>, R> covs;
-    hana::for_each(indices(), [&](auto i) { covs[i] = beliefs_[i].cov; });
-
-    auto mixed = beliefs_;
+    // The mixed covariances need every P_i, so they are built first (lower triangles, one
+    // pass each) and only then written over the modes' own.
+    std::array<SquareMatrix<N>, R> mixed_cov;
+    Matrix<N, R> mixed_dx;
+    for (int j = 0; j < R; ++j) {
+      mixed_dx.col(j).noalias() = dx.lazyProduct(w.col(j));
+      moment_match_lower(covs, dx, mixed_dx.col(j), w.col(j), mixed_cov[static_cast<std::size_t>(j)]);
+    }
     hana::for_each(indices(), [&](auto j) {
       constexpr int jj = decltype(j)::value;
-      Vector<N> m = Vector<N>::Zero();
-      for (int i = 0; i < R; ++i) m += w(i, jj) * dx[static_cast<std::size_t>(i)];
-      SquareMatrix<N> P0 = SquareMatrix<N>::Zero();
-      for (int i = 0; i < R; ++i) {
-        const Vector<N> d = dx[static_cast<std::size_t>(i)] - m;
-        P0 += w(i, jj) * (covs[static_cast<std::size_t>(i)] + d * d.transpose());
-      }
-      symmetrize(P0);
-      detail::point(mixed[j]) = state_inject(model_of(j), ref_point, m);
-      mixed[j].cov = P0;
+      detail::point(beliefs_[j]) = state_inject(model_of(j), ref_point, Vector<N>(mixed_dx.col(jj)));
+      beliefs_[j].cov = mixed_cov[jj];
+      symmetrize(beliefs_[j].cov);
     });
-    beliefs_ = mixed;
     c_ = c;
     log_lik_.setZero();
     return true;
@@ -242,16 +240,20 @@ class Imm {
   /// Mode-matched prediction of every mode. All or nothing: if any mode rejects the step the
   /// status of the first rejecting mode is returned and no mode changes.
   Status predict(const Input& u, double dt) {
-    auto next = beliefs_;
+    // Scratch for the predicted beliefs, committed together: error-state modes predict from
+    // beliefs_ straight into it; vector-state modes need their prior copied in first.
+    hana::tuple<detail::BeliefOf<typename Modes::ProcessModelType>...> next;
     Status first{};
     bool ok = true;
     hana::for_each(indices(), [&](auto j) {
       if (!ok) return;
       Status s;
-      if constexpr (detail::is_error_state<ModelAt<decltype(j)::value>>)
-        s = eskf::predict(model_of(j), next[j], u, dt, options_.filter);
-      else
+      if constexpr (detail::is_error_state<ModelAt<decltype(j)::value>>) {
+        s = eskf::detail::predict_into(model_of(j), beliefs_[j], next[j], u, dt, options_.filter, nullptr);
+      } else {
+        next[j] = beliefs_[j];
         s = ekf::predict(model_of(j), next[j], u, dt, options_.filter);
+      }
       if (!s.accepted()) {
         ok = false;
         first = s;
@@ -328,23 +330,17 @@ class Imm {
   Belief combined() const {
     const int ref = most_probable();
     const State ref_point = point_of(ref);
-    std::array<Vector<N>, R> dx;
-    std::array<SquareMatrix<N>, R> covs;
+    Matrix<N, R> dx;
+    std::array<const SquareMatrix<N>*, R> covs;
     hana::for_each(indices(), [&](auto i) {
-      dx[i] = state_difference(model_of(i), detail::point(beliefs_[i]), ref_point);
-      covs[i] = beliefs_[i].cov;
+      dx.col(decltype(i)::value) = state_difference(model_of(i), detail::point(beliefs_[i]), ref_point);
+      covs[i] = &beliefs_[i].cov;
     });
-    Vector<N> m = Vector<N>::Zero();
-    for (int i = 0; i < R; ++i) m += mu_(i) * dx[static_cast<std::size_t>(i)];
-    SquareMatrix<N> P = SquareMatrix<N>::Zero();
-    for (int i = 0; i < R; ++i) {
-      const Vector<N> d = dx[static_cast<std::size_t>(i)] - m;
-      P += mu_(i) * (covs[static_cast<std::size_t>(i)] + d * d.transpose());
-    }
-    symmetrize(P);
+    const Vector<N> m = dx.lazyProduct(mu_);
     Belief out;
+    moment_match_lower(covs, dx, m, mu_, out.cov);
+    symmetrize(out.cov);
     detail::point(out) = state_inject(modes_[hana::size_c<0>].model, ref_point, m);
-    out.cov = P;
     return out;
   }
 
@@ -370,6 +366,44 @@ class Imm {
   using ModelAt = std::tuple_element_t<J, std::tuple<typename Modes::ProcessModelType...>>;
 
   static constexpr auto indices() { return hana::make_range(hana::size_c<0>, hana::size_c<R>); }
+
+  // Lower triangle of sum_i w_i (P_i + d_i d_i') with d_i = dx_i - m, in one pass per column:
+  // the weighted covariances and the rank-R spread of the means together, accumulated in
+  // registers (the textbook sum, without a pass over the whole matrix per term).
+  template <class MeanExpr, class WeightExpr>
+  static void moment_match_lower(const std::array<const SquareMatrix<N>*, R>& covs, const Matrix<N, R>& dx,
+                                 const MeanExpr& m, const WeightExpr& w, SquareMatrix<N>& out) {
+    Matrix<N, R> d = dx.colwise() - Vector<N>(m);
+    Matrix<N, R> dw = d * Vector<R>(w).asDiagonal();
+    double wi[R];
+    for (int i = 0; i < R; ++i) wi[i] = w(i);
+    for (int c = 0; c < N; ++c) {
+      double dc[R];
+      const double* pc[R];
+      for (int i = 0; i < R; ++i) {
+        dc[i] = d(c, i);
+        pc[i] = covs[static_cast<std::size_t>(i)]->data() + c * N;
+      }
+      const double* dwd = dw.data();
+      double* o = out.data() + c * N;
+      // Two rows at a time, sums in registers (one SIMD pair per step).
+      int r = c;
+      for (; r + 1 < N; r += 2) {
+        double s0 = 0.0, s1 = 0.0;
+        for (int i = 0; i < R; ++i) {
+          s0 += wi[i] * pc[i][r] + dwd[i * N + r] * dc[i];
+          s1 += wi[i] * pc[i][r + 1] + dwd[i * N + r + 1] * dc[i];
+        }
+        o[r] = s0;
+        o[r + 1] = s1;
+      }
+      if (r < N) {
+        double s0 = 0.0;
+        for (int i = 0; i < R; ++i) s0 += wi[i] * pc[i][r] + dwd[i * N + r] * dc[i];
+        o[r] = s0;
+      }
+    }
+  }
 
   template <class J>
   const auto& model_of(J j) const {

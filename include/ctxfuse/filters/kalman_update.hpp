@@ -11,30 +11,69 @@
 
 namespace ctxfuse::detail {
 
+/// Lower triangle of F P F' (see congruence_lower: with a pattern, the block-lower part and
+/// the strict upper triangle untouched), block-sparse when the model declares
+/// `transition_blocks`.
+template <class Model, int N>
+void propagate_covariance_lower(const SquareMatrix<N>& F, const SquareMatrix<N>& P, SquareMatrix<N>& out) {
+  if constexpr (requires { Model::transition_blocks; }) {
+    static_assert(decltype(Model::transition_blocks)::layout::size == N);
+    congruence_lower<Model::transition_blocks>(F, P, out);
+  } else {
+    // Coefficient-based products: Eigen's default for N x N products of this size is its
+    // blocked GEMM, whose packing costs more than the arithmetic.
+    const SquareMatrix<N> FP = F.lazyProduct(P);
+    out.noalias() = FP.lazyProduct(F.transpose());
+  }
+}
+
 /// F P F', block-sparse when the model declares `transition_blocks`.
 template <class Model, int N>
 SquareMatrix<N> propagate_covariance(const SquareMatrix<N>& F, const SquareMatrix<N>& P) {
-  if constexpr (requires { Model::transition_blocks; }) {
-    static_assert(decltype(Model::transition_blocks)::layout::size == N);
-    return congruence<Model::transition_blocks>(F, P);
-  } else {
-    return F * P * F.transpose();
+  SquareMatrix<N> out;
+  propagate_covariance_lower<Model>(F, P, out);
+  symmetrize(out);
+  return out;
+}
+
+/// P <- G P G' after an error-state reset, for a symmetric P of which only the LOWER triangle
+/// is read and written (the strict upper one is unspecified on return; callers symmetrise).
+/// Block-sparse when the model declares `reset_blocks`; a block-diagonal pattern (the usual
+/// case: only the attitude block of G differs from I) is applied to the affected block rows
+/// and columns in place.
+template <class Model, int N>
+void reset_covariance_lower_in_place(const SquareMatrix<N>& G, SquareMatrix<N>& P) {
+  if constexpr (requires { Model::reset_blocks; }) {
+    static_assert(decltype(Model::reset_blocks)::layout::size == N);
+    if constexpr (is_block_diagonal(Model::reset_blocks)) {
+      block_diagonal_congruence_lower_in_place<Model::reset_blocks>(G, P);
+      return;
+    }
   }
+  symmetrize(P);
+  SquareMatrix<N> out;
+  if constexpr (requires { Model::reset_blocks; }) {
+    congruence_lower<Model::reset_blocks>(G, P, out);
+  } else {
+    const SquareMatrix<N> GP = G.lazyProduct(P);
+    out.noalias() = GP.lazyProduct(G.transpose());
+  }
+  P = out;
 }
 
 /// G P G' after an error-state reset, block-sparse when the model declares `reset_blocks`.
 template <class Model, int N>
 SquareMatrix<N> reset_covariance(const SquareMatrix<N>& G, const SquareMatrix<N>& P) {
-  if constexpr (requires { Model::reset_blocks; }) {
-    static_assert(decltype(Model::reset_blocks)::layout::size == N);
-    return congruence<Model::reset_blocks>(G, P);
-  } else {
-    return G * P * G.transpose();
-  }
+  SquareMatrix<N> out = P;
+  reset_covariance_lower_in_place<Model>(G, out);
+  symmetrize(out);
+  return out;
 }
 
 /// `Meas` only matters for its optional `jacobian_columns`: the blocks of the state its
 /// Jacobian can touch, so that P H' and H P H' skip the columns that are zero.
+/// On acceptance P_post holds the posterior covariance in its LOWER triangle only (its strict
+/// upper triangle is unspecified): finish_covariance() mirrors it, after the reset if any.
 template <class Meas, int N, int M, class Gate>
 Status kalman_correction(const SquareMatrix<N>& P, const Matrix<M, N>& H, const Vector<M>& y,
                          const SquareMatrix<M>& R, const Gate& gate, Vector<N>& dx,
@@ -48,8 +87,8 @@ Status kalman_correction(const SquareMatrix<N>& P, const Matrix<M, N>& H, const 
     PHt = times_transpose_columns<Meas::jacobian_columns>(P, H);
     S = columns_times<Meas::jacobian_columns>(H, PHt);
   } else {
-    PHt.noalias() = P * H.transpose();
-    S.noalias() = H * PHt;
+    PHt.noalias() = P.lazyProduct(H.transpose());
+    S.noalias() = H.lazyProduct(PHt);
   }
   S += R;
   symmetrize(S);
@@ -66,22 +105,21 @@ Status kalman_correction(const SquareMatrix<N>& P, const Matrix<M, N>& H, const 
     return status;
   }
 
-  // K = P H' S^-1, solved as (S^-1 (P H')')' since S is symmetric: no explicit inverse.
-  const Matrix<N, M> K = solve.llt.solve(PHt.transpose()).transpose();
-  dx.noalias() = K * y;
+  // K = P H' S^-1 by triangular solves with the Cholesky factor of S: no explicit inverse.
+  const Matrix<N, M> K = solve.right_solve(PHt);
+  dx.noalias() = K.lazyProduct(y);
   // Not yet symmetrised nor checked for finiteness: the filter does both once, after its
   // reset (if any), with finish_covariance().
-  P_post = joseph_update_expanded<N, M>(P, K, PHt, S);
+  joseph_update_expanded_lower<N, M>(P, K, PHt, S, P_post);
   if (!all_finite(dx)) return Status::failure(Problem::non_finite_state);
   return status;
 }
 
-/// Symmetrise and check a posterior covariance; false when it is not finite.
+/// Mirror the lower triangle of a posterior covariance and check it; false when not finite.
 template <int N>
 bool finish_covariance(SquareMatrix<N>& P) {
-  if (!all_finite(P)) return false;
   symmetrize(P);
-  return true;
+  return all_finite(P);
 }
 
 template <class Meas, int M>

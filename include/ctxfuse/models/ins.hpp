@@ -103,7 +103,9 @@ struct Ins15Model {
     out.ba = ka * x.ba;
 
     if (F) {
-      F->setIdentity();
+      // Zero fill plus a unit diagonal: Eigen's setIdentity() evaluates i == j per coefficient.
+      F->setZero();
+      F->diagonal().setOnes();
       const Eigen::Matrix3d R_ax = R * so3::skew(a);
       L::cov<"p", "v">(*F).diagonal().setConstant(dt);
       L::cov<"p", "theta">(*F) = -0.5 * dt * dt * R_ax;
@@ -161,7 +163,8 @@ struct Ins15Model {
   /// The usual I - [dtheta/2]x is the first-order truncation of Jr.
   SquareMatrix<dim> reset_jacobian(const State&, const Vector<dim>& dx) const {
     using L = ErrorLayout;
-    SquareMatrix<dim> G = SquareMatrix<dim>::Identity();
+    SquareMatrix<dim> G = SquareMatrix<dim>::Zero();
+    G.diagonal().setOnes();
     L::cov<"theta">(G) = so3::right_jacobian(Eigen::Vector3d(L::get<"theta">(dx)));
     return G;
   }
