@@ -57,6 +57,29 @@ TEST(RegionPipeline, RoutingChangesTheEstimateOnlyWhereItExcludesASensor) {
   EXPECT_TRUE(differs_later);
 }
 
+TEST(RegionPipeline, PosteriorPullOfZeroIsTheRegionImmAndAPullChangesIt) {
+  // PosteriorPull with lambda = 0 leaves the region-adaptive matrix as it is: the estimates
+  // must be the region IMM's, bit for bit. A pull towards "indoor" at every epoch must move
+  // the estimate (the matrix then favours the UWB-only sub-model).
+  ri::Settings s;
+  std::vector<int> labels(drive().gnss.size());
+  for (std::size_t i = 0; i < labels.size(); ++i) labels[i] = static_cast<int>(drive().gnss[i].region);
+  const std::vector<Vector<3>> indoor(drive().gnss.size(), Vector<3>(0.0, 0.0, 1.0));
+  const auto region = ri::run(drive(), ri::Estimator::region_imm, s, &labels);
+  s.posterior_pull = 0.0;
+  const auto zero = ri::run(drive(), ri::Estimator::region_imm_posterior, s, &labels, &indoor);
+  s.posterior_pull = 0.5;
+  const auto pulled = ri::run(drive(), ri::Estimator::region_imm_posterior, s, &labels, &indoor);
+  ASSERT_EQ(region.t.size(), zero.t.size());
+  bool moved = false;
+  for (std::size_t i = 0; i < region.t.size(); ++i) {
+    EXPECT_EQ(region.estimate[i], zero.estimate[i]) << "epoch " << i;
+    moved |= (region.estimate[i] - pulled.estimate[i]).norm() > 1e-6;
+  }
+  EXPECT_TRUE(moved);
+  EXPECT_THROW((void)ri::run(drive(), ri::Estimator::region_imm_posterior, s, &labels), std::invalid_argument);
+}
+
 TEST(RegionPipeline, ErrorsAreMeansOverTheRegionsSamples) {
   ri::Track tr;
   tr.t = {0, 1, 2};

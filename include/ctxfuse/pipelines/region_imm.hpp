@@ -112,23 +112,34 @@ inline Recognition recognise(const Recogniser& r, const FeatureSeries& f) {
   return out;
 }
 
-/// PSO-SVM (one-vs-rest RBF) and HMM trained on `train`; per-region accuracies of both on
-/// `validate` give the joint vote's weights.
-inline Recogniser train_recogniser(const FeatureSeries& train, const FeatureSeries& validate,
+/// PSO-SVM (one-vs-rest RBF) and HMM trained on the drives in `train` (the SVM on all their
+/// epochs pooled, the HMM on each drive as its own sequence, so that no transition is counted
+/// across the seam between two drives); per-region accuracies of both on `validate` give the
+/// joint vote's weights. Throws std::invalid_argument when `train` is empty.
+inline Recogniser train_recogniser(std::span<const FeatureSeries> train, const FeatureSeries& validate,
                                    const RecogniserOptions& opts = {}) {
+  if (train.empty()) throw std::invalid_argument("region_imm: train_recogniser needs at least one training drive");
   Recogniser r;
-  classify::SvmFeatures<2> X(static_cast<Eigen::Index>(train.x.size()), 2);
-  for (std::size_t i = 0; i < train.x.size(); ++i) X.row(static_cast<Eigen::Index>(i)) = train.x[i].transpose();
+  std::size_t rows = 0;
+  for (const auto& f : train) rows += f.x.size();
+  classify::SvmFeatures<2> X(static_cast<Eigen::Index>(rows), 2);
+  std::vector<int> labels;
+  labels.reserve(rows);
+  std::vector<classify::LabelledSequence<2>> sequences;
+  for (const auto& f : train) {
+    for (std::size_t i = 0; i < f.x.size(); ++i)
+      X.row(static_cast<Eigen::Index>(labels.size() + i)) = f.x[i].transpose();
+    labels.insert(labels.end(), f.truth.begin(), f.truth.end());
+    sequences.push_back({std::span<const Feature>(f.x), std::span<const int>(f.truth)});
+  }
   classify::SvmTrainOptions so;
   so.kernel = classify::SvmKernel::rbf;
   so.multiclass = classify::SvmMulticlass::one_vs_rest;
-  r.tuned = classify::tune_svm_pso<2, 3>(X, train.truth, so, opts.tune);
+  r.tuned = classify::tune_svm_pso<2, 3>(X, labels, so, opts.tune);
   so.C = r.tuned.C;
   so.gamma = r.tuned.gamma;
-  r.svm = classify::train_svm<2, 3>(X, train.truth, so);
-
-  const classify::LabelledSequence<2> seq{std::span<const Feature>(train.x), std::span<const int>(train.truth)};
-  r.hmm = classify::fit_supervised<kRegions, 2>(std::span<const classify::LabelledSequence<2>>(&seq, 1), opts.hmm);
+  r.svm = classify::train_svm<2, 3>(X, labels, so);
+  r.hmm = classify::fit_supervised<kRegions, 2>(std::span<const classify::LabelledSequence<2>>(sequences), opts.hmm);
 
   Recognition v;
   v.svm = svm_labels(r.svm, validate);
@@ -137,6 +148,27 @@ inline Recogniser train_recogniser(const FeatureSeries& train, const FeatureSeri
   r.validation_accuracy[1] = classify::per_region_accuracy<kRegions>(validate.truth, v.hmm);
   r.vote = classify::WeightedVote<kRegions, 2>::from_accuracies(r.validation_accuracy);
   return r;
+}
+
+/// One training drive.
+inline Recogniser train_recogniser(const FeatureSeries& train, const FeatureSeries& validate,
+                                   const RecogniserOptions& opts = {}) {
+  return train_recogniser(std::span<const FeatureSeries>(&train, 1), validate, opts);
+}
+
+/// The HMM's causal region posterior at every epoch (forward filter: p(region_t | features up
+/// to t)), what an online system knows; an epoch the filter cannot use (non-finite features,
+/// zero likelihood) repeats the previous posterior, and the uniform one before the first.
+inline std::vector<Vector<kRegions>> hmm_posteriors(const Recogniser& r, const FeatureSeries& f) {
+  std::vector<Vector<kRegions>> out;
+  out.reserve(f.x.size());
+  classify::HmmForwardFilter<kRegions, 2> filter(r.hmm);
+  Vector<kRegions> last = Vector<kRegions>::Constant(1.0 / kRegions);
+  for (const auto& x : f.x) {
+    if (filter.step(x) == classify::FilterStatus::ok) last = filter.posterior();
+    out.push_back(last);
+  }
+  return out;
 }
 
 inline double accuracy(std::span<const int> truth, std::span<const int> predicted) {
@@ -188,12 +220,16 @@ struct Settings {
   double stay_probability = 0.9;      // fixed prior: diagonal, per 1 s cycle
   double prior_weight = 0.5;          // w_p; w_m = 1 - w_p
   double probability_floor = 1e-4;
+  // Extension (not in the paper): region IMM whose matrix is also pulled towards the HMM's
+  // causal region posterior, P = (1 - lambda) P_m + lambda 1 pi' (policies::PosteriorPull).
+  double posterior_pull = 0.3;
 };
 
-enum class Estimator { gnss, uwb, odr, iotr, idr, fkf, imm, region_imm };
-inline constexpr std::array<Estimator, 8> kAllEstimators{Estimator::gnss, Estimator::uwb, Estimator::odr,
-                                                          Estimator::iotr, Estimator::idr, Estimator::fkf,
-                                                          Estimator::imm, Estimator::region_imm};
+enum class Estimator { gnss, uwb, odr, iotr, idr, fkf, imm, region_imm, region_imm_posterior };
+inline constexpr std::array<Estimator, 9> kAllEstimators{
+    Estimator::gnss, Estimator::uwb, Estimator::odr,        Estimator::iotr,
+    Estimator::idr,  Estimator::fkf, Estimator::imm,        Estimator::region_imm,
+    Estimator::region_imm_posterior};
 inline const char* name(Estimator e) {
   switch (e) {
     case Estimator::gnss: return "gnss";
@@ -204,6 +240,7 @@ inline const char* name(Estimator e) {
     case Estimator::fkf: return "fkf";
     case Estimator::imm: return "imm";
     case Estimator::region_imm: return "region_imm";
+    case Estimator::region_imm_posterior: return "region_imm_posterior";
   }
   return "?";
 }
@@ -515,6 +552,7 @@ struct ImmSink {
   const Settings& s;
   Mixing mixing;
   const std::vector<int>* labels = nullptr;  // recognised region per GNSS epoch (null: plain IMM)
+  const std::vector<Vector<3>>* posteriors = nullptr;  // region posterior per GNSS epoch (PosteriorPull)
   Track track;
   std::optional<RegionImm<Mixing>> f;
   std::array<FilterHealth, 3> health{FilterHealth{s}, FilterHealth{s}, FilterHealth{s}};
@@ -533,6 +571,8 @@ struct ImmSink {
     if (!labels) return;
     region = epoch < labels->size() ? (*labels)[epoch] : -1;
     f->mixing().observe_region(region);
+    if constexpr (requires(Mixing& m) { m.observe_posterior(Vector<3>{}); })
+      if (posteriors && epoch < posteriors->size()) f->mixing().observe_posterior((*posteriors)[epoch]);
   }
   std::uint32_t mask(bool gnss) const {
     if (!labels || region < 0 || region == 1) return 0b111u;
@@ -578,8 +618,10 @@ struct ImmSink {
 }  // namespace detail
 
 /// Runs one estimator over the drive. `labels` (recognised region per GNSS epoch) is needed
-/// by Estimator::region_imm only.
-inline Track run(const sim::Drive& d, Estimator e, const Settings& s, const std::vector<int>* labels = nullptr) {
+/// by the region IMMs only, `posteriors` (region posterior per GNSS epoch) by
+/// Estimator::region_imm_posterior only.
+inline Track run(const sim::Drive& d, Estimator e, const Settings& s, const std::vector<int>* labels = nullptr,
+                 const std::vector<Vector<3>>* posteriors = nullptr) {
   switch (e) {
     case Estimator::gnss: {
       detail::GnssOnly sink{d, {}};
@@ -607,7 +649,7 @@ inline Track run(const sim::Drive& d, Estimator e, const Settings& s, const std:
     }
     case Estimator::imm: {
       detail::ImmSink<policies::FixedTransition<3>> sink{
-          d, s, policies::FixedTransition<3>(policies::sticky_transition<3>(s.stay_probability)), nullptr, {}, {}};
+          d, s, policies::FixedTransition<3>(policies::sticky_transition<3>(s.stay_probability)), nullptr, nullptr, {}, {}};
       detail::replay(d, sink);
       return sink.track;
     }
@@ -617,7 +659,20 @@ inline Track run(const sim::Drive& d, Estimator e, const Settings& s, const std:
           d, s,
           policies::RegionAdaptiveTransition<3>(policies::sticky_transition<3>(s.stay_probability), s.prior_weight,
                                                 1.0 - s.prior_weight),
-          labels, {}, {}};
+          labels, nullptr, {}, {}};
+      detail::replay(d, sink);
+      return sink.track;
+    }
+    case Estimator::region_imm_posterior: {
+      if (!labels || !posteriors)
+        throw std::invalid_argument("region_imm: the posterior-pull IMM needs the recognised labels and posteriors");
+      using Pull = policies::PosteriorPull<3, policies::RegionAdaptiveTransition<3>>;
+      detail::ImmSink<Pull> sink{
+          d, s,
+          Pull(policies::RegionAdaptiveTransition<3>(policies::sticky_transition<3>(s.stay_probability), s.prior_weight,
+                                                     1.0 - s.prior_weight),
+               s.posterior_pull),
+          labels, posteriors, {}, {}};
       detail::replay(d, sink);
       return sink.track;
     }
