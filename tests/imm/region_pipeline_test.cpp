@@ -6,6 +6,7 @@
 
 #include <limits>
 #include <map>
+#include <span>
 
 #include "ctxfuse/pipelines/region_imm.hpp"
 
@@ -78,6 +79,63 @@ TEST(RegionPipeline, PosteriorPullOfZeroIsTheRegionImmAndAPullChangesIt) {
   }
   EXPECT_TRUE(moved);
   EXPECT_THROW((void)ri::run(drive(), ri::Estimator::region_imm_posterior, s, &labels), std::invalid_argument);
+}
+
+TEST(RegionPipeline, UwbAloneTracksTheGarage) {
+  // Five garage anchors at 10 Hz: a UWB-only tracker must stay within decimetres indoors.
+  // This also guards a g++ 12.2 miscompilation (see core/numerics.hpp, symmetrize) under
+  // which this very tracker drifted by kilometres with g++ only.
+  const auto tr = ri::run(drive(), ri::Estimator::uwb, ri::Settings{});
+  const auto e = ri::errors(tr);
+  ASSERT_GT(e.count[2], 100u);
+  EXPECT_LT(e.mean[2], 0.5);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < tr.t.size(); ++i)
+    if (tr.region[i] == 2) worst = std::max(worst, (tr.estimate[i] - tr.truth[i]).norm());
+  EXPECT_LT(worst, 10.0);
+}
+
+TEST(RegionPipeline, MultilaterationAgainstHandGeometry) {
+  // Tag at (4, 3), height 1; anchors at height 3. Exact ranges must give the point back.
+  const Eigen::Vector2d truth(4.0, 3.0);
+  const double tag_h = 1.0, sigma = 0.1;
+  const std::array<Eigen::Vector3d, 4> anchors{Eigen::Vector3d(0, 0, 3), Eigen::Vector3d(10, 0, 3),
+                                               Eigen::Vector3d(10, 8, 3), Eigen::Vector3d(0, 8, 3)};
+  std::vector<sim::UwbRange> ranges;
+  for (std::size_t a = 0; a < anchors.size(); ++a) {
+    sim::UwbRange r;
+    r.anchor_id = static_cast<int>(a);
+    r.anchor_position = anchors[a];
+    r.range_m = (Eigen::Vector3d(truth.x(), truth.y(), tag_h) - anchors[a]).norm();
+    ranges.push_back(r);
+  }
+  const auto snap = ri::detail::multilaterate(ranges, tag_h, sigma, 0.3);
+  ASSERT_TRUE(snap.has_value());
+  EXPECT_LT((snap->position - truth).norm(), 1e-9);
+  // sigma^2 (J'J)^-1 with the unit horizontal directions J written out by hand.
+  Eigen::Matrix2d JtJ = Eigen::Matrix2d::Zero();
+  for (const auto& a : anchors) {
+    const Eigen::Vector2d d(truth.x() - a.x(), truth.y() - a.y());
+    const double n = std::sqrt(d.squaredNorm() + (tag_h - a.z()) * (tag_h - a.z()));
+    JtJ += (d / n) * (d / n).transpose();
+  }
+  EXPECT_LT((snap->cov - sigma * sigma * JtJ.inverse()).cwiseAbs().maxCoeff(), 1e-12);
+
+  // Two anchors: the mirror image is as good a fit, so no fix.
+  EXPECT_FALSE(ri::detail::multilaterate(std::span(ranges).first(2), tag_h, sigma, 0.3).has_value());
+  // A 2 m NLOS excess on one of four ranges: residuals far above line-of-sight noise.
+  auto nlos = ranges;
+  nlos[1].range_m += 2.0;
+  EXPECT_FALSE(ri::detail::multilaterate(nlos, tag_h, sigma, 0.3).has_value());
+  // Three collinear anchors with the tag on their line: no horizontal fix across it.
+  std::vector<sim::UwbRange> line;
+  for (double x : {0.0, 5.0, 10.0}) {
+    sim::UwbRange r;
+    r.anchor_position = Eigen::Vector3d(x, 0.0, 3.0);
+    r.range_m = (Eigen::Vector3d(4.0, 0.0, tag_h) - r.anchor_position).norm();
+    line.push_back(r);
+  }
+  EXPECT_FALSE(ri::detail::multilaterate(line, tag_h, sigma, 0.3).has_value());
 }
 
 TEST(RegionPipeline, ErrorsAreMeansOverTheRegionsSamples) {

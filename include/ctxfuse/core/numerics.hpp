@@ -23,17 +23,16 @@ bool all_finite(const Eigen::DenseBase<Derived>& m) {
 /// Makes P exactly symmetric by mirroring its lower triangle onto the upper one. The two
 /// triangles of a covariance computed by the filters differ only by rounding, so averaging
 /// them would buy nothing and cost three times as much (strided reads of both triangles).
+///
+/// Eigen's triangular-view assignment, deliberately not a plain loop: g++ 12.2 at -O1/-O2
+/// dropped the upper-triangle stores of a plain `P(i, j) = P(j, i)` loop when the matrix was
+/// a local whose lower triangle had just been written element by element and which was then
+/// copied out (the copy read uninitialised memory: valgrind shows it, -fno-strict-aliasing
+/// and clang do not have it). The UWB-alone tracker of the region pipeline diverged by
+/// kilometres under g++ only; tests/imm/region_pipeline_test.cpp keeps that case.
 template <class Derived>
 void symmetrize(Eigen::MatrixBase<Derived>& P) {
-  constexpr int n = Derived::RowsAtCompileTime;
-  if constexpr (n != Eigen::Dynamic && n == Derived::ColsAtCompileTime) {
-    // Plain loops with compile-time bounds: about half the instructions of Eigen's
-    // triangular-view assignment for a 15x15.
-    for (int j = 1; j < n; ++j)
-      for (int i = 0; i < j; ++i) P.coeffRef(i, j) = P.coeff(j, i);
-  } else {
-    P.template triangularView<Eigen::StrictlyUpper>() = P.transpose();
-  }
+  P.template triangularView<Eigen::StrictlyUpper>() = P.transpose();
 }
 
 /// Joseph form P+ = (I - K H) P (I - K H)' + K R K'. Symmetric and positive semi-definite for

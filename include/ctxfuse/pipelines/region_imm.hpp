@@ -399,20 +399,74 @@ struct GnssOnly {
   void epoch_done(const sim::GnssEpoch& e) { record(track, d, e, last); }
 };
 
+/// Snapshot multilateration: the horizontal position whose ranges (tag at `tag_height`) best
+/// fit `ranges` to the anchors, by Gauss-Newton from the anchors' centroid. Returns nothing
+/// when fewer than 3 anchors, when the geometry is degenerate, when it does not converge, or
+/// when the RMS range residual exceeds `max_rms` (an NLOS range among them). `cov` gets
+/// sigma^2 (J'J)^-1.
+struct UwbSnapshot {
+  Eigen::Vector2d position;
+  Eigen::Matrix2d cov;
+};
+inline std::optional<UwbSnapshot> multilaterate(std::span<const sim::UwbRange> ranges, double tag_height, double sigma,
+                                                double max_rms) {
+  if (ranges.size() < 3) return std::nullopt;
+  Eigen::Vector2d p = Eigen::Vector2d::Zero();
+  for (const auto& r : ranges) p += r.anchor_position.head<2>();
+  p /= static_cast<double>(ranges.size());
+  // Off the centroid a little: on an anchor the Jacobian row vanishes.
+  p += Eigen::Vector2d(0.37, 0.23);
+  Eigen::Matrix2d JtJ;
+  double rms = 0.0;
+  for (int iter = 0; iter < 20; ++iter) {
+    JtJ.setZero();
+    Eigen::Vector2d Jtr = Eigen::Vector2d::Zero();
+    double sq = 0.0;
+    for (const auto& r : ranges) {
+      const Eigen::Vector3d d(p.x() - r.anchor_position.x(), p.y() - r.anchor_position.y(), tag_height - r.anchor_position.z());
+      const double n = d.norm();
+      if (!(n > 1e-6)) return std::nullopt;
+      const Eigen::Vector2d j = d.head<2>() / n;
+      const double res = r.range_m - n;
+      JtJ += j * j.transpose();
+      Jtr += j * res;
+      sq += res * res;
+    }
+    rms = std::sqrt(sq / static_cast<double>(ranges.size()));
+    // A near-singular J'J: anchors (nearly) collinear with the tag, the mirror ambiguity open.
+    if (JtJ.determinant() < 1e-3) return std::nullopt;
+    const Eigen::Vector2d step = JtJ.ldlt().solve(Jtr);
+    p += step;
+    if (step.norm() < 1e-6) break;
+    if (iter == 19) return std::nullopt;
+  }
+  if (!p.allFinite() || rms > max_rms) return std::nullopt;
+  return UwbSnapshot{p, sigma * sigma * JtJ.inverse()};
+}
+
 /// UWB alone: the ranges in a constant-velocity EKF (no IMU), as a UWB positioning system
-/// runs its own tracker. The 7 anchors of the simulated garage give 2-4 ranges per epoch, too
-/// few for snapshot multilateration most of the time. Without an accepted range for
-/// `uwb_hold_after_s` the last position is held instead of extrapolated (what such a system
-/// reports when it loses the tag).
+/// runs its own tracker. The track starts from a snapshot multilateration of one epoch's
+/// ranges (at least 3 anchors, residuals consistent with line of sight), and is re-anchored
+/// to such a snapshot whenever the two disagree (chi-square 0.999 on 2 dof): with only the
+/// two approach anchors in reach, ranges cannot tell the track from its mirror image about
+/// the anchors' line, and a tracker that once slipped onto the mirror keeps having its
+/// ranges accepted there. Lock is lost when no range has arrived for `uwb_hold_after_s` (out
+/// of radio range) or when every range has been gated for the health timeout (a lock-out,
+/// as policies/health.hpp defines it); without lock the last position is held (what such a
+/// system reports when it loses the tag).
 struct UwbOnly {
   using Cv = models::ConstantVelocity<L, 2>;
+  static constexpr double kDisagreement = 13.8155;  // chi-square 0.999 quantile, 2 dof
   const sim::Drive& d;
   const Settings& s;
   Track track;
   std::optional<Ekf<Cv, ChiSquareGate>> f;
-  double last_fix_t = -1e9;
+  policies::SourceHealth health{s.health};
+  bool locked = false;
+  double last_range_t = -1e9;
   Eigen::Vector2d held = Eigen::Vector2d::Zero();
   double now = 0.0;
+  std::vector<sim::UwbRange> epoch_ranges;  // the ranges of the current time stamp so far
   void start(double t0, const Eigen::Vector2d& p0) {
     Cv cv;
     cv.accel_psd = s.uwb_alone_accel_psd;
@@ -420,7 +474,6 @@ struct UwbOnly {
     b.mean.setZero();
     L::get<"p">(b.mean) = p0;
     b.cov = SquareMatrix<L::size>::Identity();
-    L::cov<"p">(b.cov) *= 100.0;
     f.emplace(cv, b, FilterOptions{}, ChiSquareGate(s.gate_probability));
     now = t0;
     held = p0;
@@ -431,26 +484,41 @@ struct UwbOnly {
   }
   void cycle_start() {}
   void speed(const sim::SpeedSample&) {}
+  bool disagrees(const UwbSnapshot& snap) const {
+    const auto& b = f->belief();
+    const Eigen::Vector2d dp = snap.position - L::get<"p">(b.mean);
+    const Eigen::Matrix2d S = snap.cov + Eigen::Matrix2d(L::cov<"p">(b.cov));
+    return dp.dot(S.ldlt().solve(dp)) > kDisagreement;
+  }
   void uwb(const sim::UwbRange& r) {
-    if (now - last_fix_t > s.uwb_hold_after_s) {
-      // Re-acquisition: the tag is within radio range of this anchor; restart the track
-      // there with a covariance that spans that range.
-      auto b = f->belief();
-      // On the range circle toward the last held position (not on the anchor itself, where
-      // the range carries no direction and its Jacobian vanishes).
-      const Eigen::Vector2d a = r.anchor_position.head<2>();
-      const Eigen::Vector2d dir = (held - a).norm() > 1e-6 ? Eigen::Vector2d((held - a).normalized()) : Eigen::Vector2d(1.0, 0.0);
-      L::get<"p">(b.mean) = a + dir * std::max(r.range_m, 1.0);
-      L::get<"v">(b.mean).setZero();
+    last_range_t = now;
+    if (!epoch_ranges.empty() && std::abs(epoch_ranges.front().t - r.t) > 1e-9) epoch_ranges.clear();
+    epoch_ranges.push_back(r);
+    const auto snap = multilaterate(epoch_ranges, s.uwb_tag_height, s.uwb_sigma, 3.0 * s.uwb_sigma);
+    if (snap && (!locked || disagrees(*snap))) {
+      Gaussian<L::size> b = f->belief();
+      L::get<"p">(b.mean) = snap->position;
       b.cov = SquareMatrix<L::size>::Identity();
-      L::cov<"p">(b.cov) *= r.range_m * r.range_m + 1.0;
+      L::cov<"p">(b.cov) = snap->cov;
+      if (!locked) {
+        L::get<"v">(b.mean).setZero();
+        L::cov<"v">(b.cov) *= 4.0;  // (2 m/s)^2: a vehicle's speed, direction unknown
+      } else {
+        L::cov<"v">(b.cov) = L::cov<"v">(f->belief().cov);
+      }
       f->reset(b);
+      locked = true;
+      health.recovered();
+      return;
     }
-    if (f->update(uwb_meas(r, s), Vector<1>(r.range_m)).accepted()) last_fix_t = now;
+    if (!locked) return;
+    health.record(r.t, f->update(uwb_meas(r, s), Vector<1>(r.range_m)));
+    if (health.lockout(r.t)) locked = false;
   }
   void gnss(const sim::GnssEpoch&) {}
   void epoch_done(const sim::GnssEpoch& e) {
-    if (now - last_fix_t <= s.uwb_hold_after_s) held = L::get<"p">(f->belief().mean);
+    if (now - last_range_t > s.uwb_hold_after_s) locked = false;
+    if (locked) held = L::get<"p">(f->belief().mean);
     record(track, d, e, held);
   }
 };
