@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
 # Runs `ctxfuse demo` from the g++ and the clang release builds on the same seeds and checks
-# that every number they print in JSON agrees exactly (scripts/compare_compilers.py says why):
+# that every number they print in JSON agrees exactly (scripts/compare_compilers.py says why),
+# then the same for the error-state path the demo does not use yet: 2000 IMM steps with three
+# 15-state ESKF modes and 2000 steps of three independent ESKFs (bench_imm_steps prints the
+# final position to 17 digits).
 #   scripts/compare_compilers.sh [seed ...]      (default seeds: 1 2)
 # Needs build/release and build/clang (scripts/test.sh release, scripts/test.sh clang).
 set -uo pipefail
@@ -25,5 +28,15 @@ for seed in "${seeds[@]}"; do
   done
   echo "== seed $seed: g++ vs clang"
   python3 "$repo/scripts/compare_compilers.py" "$out/release-$seed.json" "$out/clang-$seed.json" || status=1
+done
+for workload in imm three_eskf; do
+  a=$("$repo/build/release/bench/imm/bench_imm_steps" "$workload" 2000 2>&1) || status=1
+  b=$("$repo/build/clang/bench/imm/bench_imm_steps" "$workload" 2000 2>&1) || status=1
+  if [[ "$a" == "$b" ]]; then
+    echo "== bench_imm_steps $workload 2000: g++ and clang agree ($a)"
+  else
+    echo "== bench_imm_steps $workload 2000: g++ $a, clang $b: DIFFERENT"
+    status=1
+  fi
 done
 exit "$status"

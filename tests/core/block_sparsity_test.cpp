@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <array>
+#include <cstdlib>
 #include <limits>
 
 #include "ctxfuse/core/block_sparsity.hpp"
@@ -203,6 +204,45 @@ TEST(BlockSparsity, FilterResultsDoNotDependOnDeclaredPatterns) {
   }
   EXPECT_LT((fs.belief().cov - fd.belief().cov).cwiseAbs().maxCoeff(), 1e-12);
   EXPECT_LT(sparse.difference(fs.nominal(), fd.nominal()).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+// A pattern over uneven blocks with every kind, an identity and a diagonal block that are not
+// first in their row, a block row with no block and blocks above the block diagonal: the
+// plain-loop congruence (which skips the rows of P A' it never reads) against the dense
+// formula on random inputs.
+TEST(BlockSparsity, CongruenceOnAnIrregularPatternEqualsDense) {
+  using UL = Layout<Block<"a", 2>, Block<"b", 3>, Block<"c", 1>, Block<"d", 4>>;
+  static constexpr auto pat = block_pattern<UL>({{"a", "c"}, {"a", "a", kIdentity}, {"b", "a"}, {"b", "d"},
+                                                 {"b", "b", kDiagonal}, {"d", "b"}, {"d", "d", kIdentity}});
+  constexpr int N = UL::size;
+  std::srand(41);
+  for (int trial = 0; trial < 5; ++trial) {
+    SquareMatrix<N> F = SquareMatrix<N>::Zero();
+    for (std::size_t k = 0; k < decltype(pat)::size; ++k) {
+      const auto rb = static_cast<std::size_t>(pat.row[k]), cb = static_cast<std::size_t>(pat.col[k]);
+      auto blk = F.block(UL::offsets[rb], UL::offsets[cb], UL::sizes[rb], UL::sizes[cb]);
+      if (pat.kind[k] == BlockKind::identity) blk.setIdentity();
+      else if (pat.kind[k] == BlockKind::diagonal) blk.diagonal().setRandom();
+      else blk.setRandom();
+    }
+    const SquareMatrix<N> B = SquareMatrix<N>::Random();
+    const SquareMatrix<N> P = B * B.transpose() + SquareMatrix<N>::Identity();
+    const Eigen::MatrixXd dense = Eigen::MatrixXd(F) * Eigen::MatrixXd(P) * Eigen::MatrixXd(F).transpose();
+    const double scale = dense.cwiseAbs().maxCoeff();
+    EXPECT_LT((congruence<pat>(F, P) - dense).cwiseAbs().maxCoeff(), 1e-12 * scale);
+    SquareMatrix<N> out = SquareMatrix<N>::Constant(-3.0);
+    congruence_lower<pat>(F, P, out);
+    const auto block_of = [](int i) {
+      int b = 0;
+      while (b + 1 < static_cast<int>(UL::names.size()) && UL::offsets[static_cast<std::size_t>(b) + 1] <= i) ++b;
+      return b;
+    };
+    for (int j = 0; j < N; ++j)
+      for (int i = 0; i < N; ++i) {
+        if (block_of(i) >= block_of(j)) EXPECT_NEAR(out(i, j), dense(i, j), 1e-12 * scale) << i << "," << j;
+        else EXPECT_EQ(out(i, j), -3.0) << i << "," << j;
+      }
+  }
 }
 
 }  // namespace

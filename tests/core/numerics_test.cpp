@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "ctxfuse/core/numerics.hpp"
+#include "ctxfuse/core/so3.hpp"
 #include "ctxfuse/policies/gating.hpp"
 
 namespace {
@@ -143,6 +144,79 @@ TEST(Numerics, SymmetrizeMirrorsTheLowerTriangle) {
   EXPECT_EQ(P(1, 2), 8.0);
   EXPECT_EQ(P.diagonal(), Vector<3>(1, 5, 9));
   EXPECT_EQ(P, P.transpose());
+}
+
+TEST(Numerics, SymmetrizeAndAddLowerMatchEigenTriangularViews) {
+  std::srand(23);
+  const SquareMatrix<15> A = SquareMatrix<15>::Random();
+  SquareMatrix<15> mirrored = A;
+  symmetrize(mirrored);
+  SquareMatrix<15> expected = A;
+  expected.triangularView<Eigen::StrictlyUpper>() = A.transpose();
+  EXPECT_EQ(mirrored, expected);
+
+  const SquareMatrix<15> Q = SquareMatrix<15>::Random();
+  SquareMatrix<15> sum = A;
+  add_lower(sum, Q);
+  for (int j = 0; j < 15; ++j)
+    for (int i = 0; i < 15; ++i) EXPECT_EQ(sum(i, j), i >= j ? A(i, j) + Q(i, j) : A(i, j)) << i << "," << j;
+}
+
+TEST(Numerics, LowerMinusProductEqualsDenseFormula) {
+  std::srand(29);
+  const SquareMatrix<15> P(random_spd(15, 31));
+  const Matrix<15, 6> A = Matrix<15, 6>::Random();
+  const Matrix<15, 6> B = Matrix<15, 6>::Random();
+  const Eigen::MatrixXd expected = Eigen::MatrixXd(P) - Eigen::MatrixXd(A) * Eigen::MatrixXd(B).transpose();
+  SquareMatrix<15> out = SquareMatrix<15>::Constant(-5.0);
+  lower_minus_product<15, 6>(P, A, B, out);
+  for (int j = 0; j < 15; ++j)
+    for (int i = 0; i < 15; ++i) {
+      if (i < j) EXPECT_EQ(out(i, j), -5.0);
+      else EXPECT_NEAR(out(i, j), expected(i, j), 1e-12 * (1.0 + std::abs(expected(i, j))));
+    }
+}
+
+TEST(So3, SharedExpAndRightJacobianEqualTheSeparateOnes) {
+  // Large, moderate, small (series branch of Jr only) and tiny (series branch of both) angles.
+  for (const double scale : {2.5, 0.3, 1e-4, 3e-6, 1e-9}) {
+    const Eigen::Vector3d phi = scale * Eigen::Vector3d(0.6, -0.48, 0.64);
+    Eigen::Quaterniond q;
+    Eigen::Matrix3d Jr;
+    so3::exp_quat_and_right_jacobian(phi, q, Jr);
+    // Reference rotation from Eigen's angle-axis, independent of so3::.
+    const Eigen::Matrix3d R_ref = Eigen::AngleAxisd(phi.norm(), phi.normalized()).toRotationMatrix();
+    EXPECT_LT((q.toRotationMatrix() - R_ref).cwiseAbs().maxCoeff(), 1e-14) << scale;
+    EXPECT_NEAR(q.norm(), 1.0, 1e-14);
+    // Reference Jr = I - a K + b K^2 with a = (1 - cos t) / t^2 and b = (t - sin t) / t^3 summed
+    // as their Taylor series (no cancellation, unlike the closed forms at small t, where
+    // 1 - cos t loses about half the digits; the shared form uses 2 sin^2(t/2) instead).
+    const double t2 = phi.squaredNorm();
+    double a = 0.0, b = 0.0, term_a = 0.5, term_b = 1.0 / 6.0;
+    for (int k = 0; k < 30; ++k) {
+      a += term_a;
+      b += term_b;
+      term_a *= -t2 / ((2.0 * k + 3.0) * (2.0 * k + 4.0));
+      term_b *= -t2 / ((2.0 * k + 4.0) * (2.0 * k + 5.0));
+    }
+    const Eigen::Matrix3d K = so3::skew(phi);
+    const Eigen::Matrix3d Jr_ref = Eigen::Matrix3d::Identity() - a * K + b * K * K;
+    EXPECT_LT((Jr - Jr_ref).cwiseAbs().maxCoeff(), 2e-15) << scale;
+    // The separate closed form agrees to its own cancellation error.
+    EXPECT_LT((Jr - so3::right_jacobian(phi)).cwiseAbs().maxCoeff(), 1e-11) << scale;
+    // Jr from its definition Exp(phi + d) = Exp(phi) Exp(Jr d), by central differences.
+    if (scale > 1e-3) {
+      Eigen::Matrix3d numeric;
+      const double h = 1e-6;
+      for (int k = 0; k < 3; ++k) {
+        const Eigen::Vector3d e = h * Eigen::Vector3d::Unit(k);
+        const Eigen::Quaterniond plus(so3::exp(phi + e)), minus(so3::exp(phi - e));
+        numeric.col(k) = (so3::log(Eigen::Quaterniond(q.conjugate() * plus)) -
+                          so3::log(Eigen::Quaterniond(q.conjugate() * minus))) / (2.0 * h);
+      }
+      EXPECT_LT((numeric - Jr).cwiseAbs().maxCoeff(), 1e-8) << scale;
+    }
+  }
 }
 
 }  // namespace

@@ -58,13 +58,15 @@ struct Layout {
     return true;
   }(), "block names in a layout must be unique");
 
+  // consteval: a constexpr function is only guaranteed to be folded in a constant context, and
+  // g++ calls index_of (a string search) at run time for every Eigen block view otherwise.
   template <FixedString Name>
-  static constexpr int offset() {
+  static consteval int offset() {
     static_assert(index_of(Name.view()) >= 0, "no block of that name in this layout");
     return offsets[static_cast<std::size_t>(index_of(Name.view()))];
   }
   template <FixedString Name>
-  static constexpr int size_of() {
+  static consteval int size_of() {
     static_assert(index_of(Name.view()) >= 0, "no block of that name in this layout");
     return sizes[static_cast<std::size_t>(index_of(Name.view()))];
   }

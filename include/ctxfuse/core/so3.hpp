@@ -59,18 +59,38 @@ Vec3<Scalar> log(const Eigen::Quaternion<Scalar>& q_in) {
   return Scalar(2) * atan2(s, q.w()) / s * v;
 }
 
-/// Right Jacobian Jr(phi): Exp(phi + d) ~= Exp(phi) Exp(Jr(phi) d).
+/// Exp(phi) as a unit quaternion and the right Jacobian Jr(phi) together, from one sine and
+/// one cosine of |phi|/2 (sin|phi| = 2 s c, 1 - cos|phi| = 2 s^2): the INS prediction needs
+/// both for the same rotation vector, and the trigonometric calls dominate either alone.
 template <class Derived>
-Mat3<typename Derived::Scalar> right_jacobian(const Eigen::MatrixBase<Derived>& phi) {
+void exp_quat_and_right_jacobian(const Eigen::MatrixBase<Derived>& phi, Eigen::Quaternion<typename Derived::Scalar>& q,
+                                 Mat3<typename Derived::Scalar>& Jr) {
   using S = typename Derived::Scalar;
   using std::cos;
   using std::sin;
   using std::sqrt;
   const S theta2 = phi.squaredNorm();
   const Mat3<S> K = skew(phi);
-  if (theta2 < S(1e-10)) return Mat3<S>::Identity() - K / S(2) + K * K / S(6);
+  if (theta2 < S(1e-10)) {
+    q = exp_quat(phi);
+    Jr = Mat3<S>::Identity() - K / S(2) + K * K / S(6);
+    return;
+  }
   const S theta = sqrt(theta2);
-  return Mat3<S>::Identity() - (S(1) - cos(theta)) / theta2 * K + (theta - sin(theta)) / (theta2 * theta) * K * K;
+  const S s = sin(theta / S(2)), c = cos(theta / S(2));
+  const S k = s / theta;
+  q = Eigen::Quaternion<S>(c, k * phi(0), k * phi(1), k * phi(2));
+  Jr = Mat3<S>::Identity() - (S(2) * s * s) / theta2 * K + (theta - S(2) * s * c) / (theta2 * theta) * K * K;
+}
+
+/// Right Jacobian Jr(phi): Exp(phi + d) ~= Exp(phi) Exp(Jr(phi) d). Through the half-angle
+/// form above, which keeps the digits that 1 - cos|phi| loses for small angles.
+template <class Derived>
+Mat3<typename Derived::Scalar> right_jacobian(const Eigen::MatrixBase<Derived>& phi) {
+  Eigen::Quaternion<typename Derived::Scalar> q;
+  Mat3<typename Derived::Scalar> Jr;
+  exp_quat_and_right_jacobian(phi, q, Jr);
+  return Jr;
 }
 
 }  // namespace ctxfuse::so3

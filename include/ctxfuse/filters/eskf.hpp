@@ -71,37 +71,50 @@ Status predict(const Model& model, Belief<Model>& belief, const typename Model::
   return s;
 }
 
-/// Correction, injection and reset. `dx_applied`, when given, receives the injected error.
-template <ErrorStateProcessModel Model, class Meas, class Gate = NoGate>
+namespace detail {
+/// The correction, injection and reset from `in` into `out`, which may not alias `in`; `out`
+/// is scratch that holds the corrected belief only when the status is accepted (an IMM
+/// corrects its modes this way and swaps buffers instead of copying covariances).
+template <ErrorStateProcessModel Model, class Meas, class Gate>
   requires MeasurementModel<Meas, typename Model::State, Model::dim> && GatePolicy<Gate>
-Status update(const Model& model, const Meas& meas, Belief<Model>& belief, const Vector<Meas::dim>& z,
-              const Gate& gate = {}, const FilterOptions& opts = {}, Vector<Model::dim>* dx_applied = nullptr) {
+Status update_into(const Model& model, const Meas& meas, const Belief<Model>& in, Belief<Model>& out,
+                   const Vector<Meas::dim>& z, const Gate& gate, const FilterOptions& opts,
+                   Vector<Model::dim>* dx_applied) {
   constexpr int N = Model::dim;
   constexpr int M = Meas::dim;
-  const SquareMatrix<M> R = meas.noise(belief.nominal);
+  const SquareMatrix<M> R = meas.noise(in.nominal);
   if (Problem p = check_measurement<M>(z, R, opts); p != Problem::none) return Status::invalid(p);
   if (Problem p = ctxfuse::detail::model_check(meas, z); p != Problem::none) return Status::invalid(p);
 
   Matrix<M, N> H;
-  const Vector<M> z_pred = meas.predict(belief.nominal, &H);
+  const Vector<M> z_pred = meas.predict(in.nominal, &H);
   const Vector<M> y = ctxfuse::detail::innovation(meas, z, z_pred);
 
-  // The one output buffer: the belief is written only once everything has succeeded.
   Vector<N> dx;
-  SquareMatrix<N> P;
-  Status status = ctxfuse::detail::kalman_correction<Meas, N, M>(belief.cov, H, y, R, gate, dx, P);
+  Status status = ctxfuse::detail::kalman_correction<Meas, N, M>(in.cov, H, y, R, gate, dx, out.cov);
   if (!status.accepted()) return status;
 
-  typename Model::State x = model.inject(belief.nominal, dx);
-  if (!detail::nominal_is_finite(model, x)) return Status::failure(Problem::non_finite_state);
-  if constexpr (requires { { model.reset_jacobian(belief.nominal, dx) } -> std::convertible_to<SquareMatrix<N>>; }) {
-    const SquareMatrix<N> G = model.reset_jacobian(belief.nominal, dx);
-    ctxfuse::detail::reset_covariance_lower_in_place<Model>(G, P);
+  out.nominal = model.inject(in.nominal, dx);
+  if (!detail::nominal_is_finite(model, out.nominal)) return Status::failure(Problem::non_finite_state);
+  if constexpr (requires { { model.reset_jacobian(in.nominal, dx) } -> std::convertible_to<SquareMatrix<N>>; }) {
+    const SquareMatrix<N> G = model.reset_jacobian(in.nominal, dx);
+    ctxfuse::detail::reset_covariance_lower_in_place<Model>(G, out.cov);
   }
-  if (!ctxfuse::detail::finish_covariance(P)) return Status::failure(Problem::non_finite_covariance);
-  belief.nominal = std::move(x);
-  belief.cov = P;
+  if (!ctxfuse::detail::finish_covariance(out.cov)) return Status::failure(Problem::non_finite_covariance);
   if (dx_applied) *dx_applied = dx;
+  return status;
+}
+}  // namespace detail
+
+/// Correction, injection and reset. `dx_applied`, when given, receives the injected error.
+/// The belief is written only once everything has succeeded.
+template <ErrorStateProcessModel Model, class Meas, class Gate = NoGate>
+  requires MeasurementModel<Meas, typename Model::State, Model::dim> && GatePolicy<Gate>
+Status update(const Model& model, const Meas& meas, Belief<Model>& belief, const Vector<Meas::dim>& z,
+              const Gate& gate = {}, const FilterOptions& opts = {}, Vector<Model::dim>* dx_applied = nullptr) {
+  Belief<Model> next;
+  const Status status = detail::update_into(model, meas, belief, next, z, gate, opts, dx_applied);
+  if (status.accepted()) belief = next;
   return status;
 }
 

@@ -169,7 +169,7 @@ class Imm {
   Imm(Mixing mixing, hana::tuple<Modes...> modes, const Belief& initial, const Probabilities& mu0,
       ImmOptions<R> options = {})
       : mixing_(std::move(mixing)), modes_(std::move(modes)), options_(options) {
-    hana::for_each(indices(), [&](auto j) { beliefs_[j] = initial; });
+    hana::for_each(indices(), [&](auto j) { buffers_[0][j] = initial; });
     mu_ = mu0.cwiseMax(0.0);
     const double s = mu_.sum();
     mu_ = s > 0.0 ? Probabilities(mu_ / s) : Probabilities::Constant(1.0 / R);
@@ -182,10 +182,12 @@ class Imm {
   const Probabilities& predicted_probabilities() const { return c_; }
   /// Accumulated log-likelihood per mode in the open cycle.
   const Probabilities& cycle_log_likelihood() const { return log_lik_; }
+  /// Mode J's belief. The reference refers to one of two buffers that the steps alternate
+  /// between: read it again after mix(), predict() or update() rather than keeping it.
   template <int J>
-  const auto& mode_belief() const { return beliefs_[hana::size_c<J>]; }
+  const auto& mode_belief() const { return belief(hana::size_c<J>); }
   template <int J>
-  auto& mode_belief() { return beliefs_[hana::size_c<J>]; }
+  auto& mode_belief() { return belief(hana::size_c<J>); }
   template <int J>
   const auto& mode() const { return modes_[hana::size_c<J>]; }
   Mixing& mixing() { return mixing_; }
@@ -215,23 +217,20 @@ class Imm {
     Matrix<N, R> dx;
     std::array<const SquareMatrix<N>*, R> covs;
     hana::for_each(indices(), [&](auto i) {
-      dx.col(decltype(i)::value) = state_difference(model_of(i), detail::point(beliefs_[i]), ref_point);
-      covs[i] = &beliefs_[i].cov;
+      dx.col(decltype(i)::value) = state_difference(model_of(i), detail::point(belief(i)), ref_point);
+      covs[i] = &belief(i).cov;
     });
-    // The mixed covariances need every P_i, so they are built first (lower triangles, one
-    // pass each) and only then written over the modes' own.
-    std::array<SquareMatrix<N>, R> mixed_cov;
-    Matrix<N, R> mixed_dx;
-    for (int j = 0; j < R; ++j) {
-      mixed_dx.col(j).noalias() = dx.lazyProduct(w.col(j));
-      moment_match_lower(covs, dx, mixed_dx.col(j), w.col(j), mixed_cov[static_cast<std::size_t>(j)]);
-    }
+    // The mixed beliefs need every P_i, so they are built in the spare buffers (lower
+    // triangles, one pass each) and the buffers are swapped once all are done.
     hana::for_each(indices(), [&](auto j) {
       constexpr int jj = decltype(j)::value;
-      detail::point(beliefs_[j]) = state_inject(model_of(j), ref_point, Vector<N>(mixed_dx.col(jj)));
-      beliefs_[j].cov = mixed_cov[jj];
-      symmetrize(beliefs_[j].cov);
+      auto& out = spare(j);
+      const Vector<N> mixed_dx = dx.lazyProduct(w.col(jj));
+      moment_match_lower(covs, dx, mixed_dx, w.col(jj), out.cov);
+      symmetrize(out.cov);
+      detail::point(out) = state_inject(model_of(j), ref_point, mixed_dx);
     });
+    for (auto& b : current_) b ^= 1u;
     c_ = c;
     log_lik_.setZero();
     return true;
@@ -240,26 +239,26 @@ class Imm {
   /// Mode-matched prediction of every mode. All or nothing: if any mode rejects the step the
   /// status of the first rejecting mode is returned and no mode changes.
   Status predict(const Input& u, double dt) {
-    // Scratch for the predicted beliefs, committed together: error-state modes predict from
-    // beliefs_ straight into it; vector-state modes need their prior copied in first.
-    hana::tuple<detail::BeliefOf<typename Modes::ProcessModelType>...> next;
+    // The predicted beliefs go to the spare buffers, committed together by swapping buffers:
+    // error-state modes predict straight into them; vector-state modes copy their prior first.
     Status first{};
     bool ok = true;
     hana::for_each(indices(), [&](auto j) {
       if (!ok) return;
       Status s;
       if constexpr (detail::is_error_state<ModelAt<decltype(j)::value>>) {
-        s = eskf::detail::predict_into(model_of(j), beliefs_[j], next[j], u, dt, options_.filter, nullptr);
+        s = eskf::detail::predict_into(model_of(j), belief(j), spare(j), u, dt, options_.filter, nullptr);
       } else {
-        next[j] = beliefs_[j];
-        s = ekf::predict(model_of(j), next[j], u, dt, options_.filter);
+        spare(j) = belief(j);
+        s = ekf::predict(model_of(j), spare(j), u, dt, options_.filter);
       }
       if (!s.accepted()) {
         ok = false;
         first = s;
       }
     });
-    if (ok) beliefs_ = next;
+    if (ok)
+      for (auto& b : current_) b ^= 1u;
     return first;
   }
 
@@ -282,14 +281,18 @@ class Imm {
       result.taken[jj] = takes;
       Status s;
       if (takes) {
-        if constexpr (detail::is_error_state<ModelAt<decltype(j)::value>>)
-          s = eskf::update(model_of(j), mj, beliefs_[j], z, modes_[j].gate, options_.filter);
-        else
-          s = ekf::update<N>(mj, beliefs_[j], z, modes_[j].gate, options_.filter);
+        if constexpr (detail::is_error_state<ModelAt<decltype(j)::value>>) {
+          // Corrected into the spare buffer, which becomes the mode's belief on acceptance.
+          s = eskf::detail::update_into(model_of(j), mj, belief(j), spare(j), z, modes_[j].gate, options_.filter,
+                                        nullptr);
+          if (s.accepted()) current_[jj] ^= 1u;
+        } else {
+          s = ekf::update<N>(mj, belief(j), z, modes_[j].gate, options_.filter);
+        }
         ++result.taken_count;
         if (s.accepted()) ++result.accepted_count;
       } else {
-        s = score(mj, beliefs_[j], z);
+        s = score(mj, belief(j), z);
       }
       result.mode[jj] = s;
       if (s.outcome == Outcome::invalid_input && result.problem == Problem::none) result.problem = s.problem;
@@ -333,8 +336,8 @@ class Imm {
     Matrix<N, R> dx;
     std::array<const SquareMatrix<N>*, R> covs;
     hana::for_each(indices(), [&](auto i) {
-      dx.col(decltype(i)::value) = state_difference(model_of(i), detail::point(beliefs_[i]), ref_point);
-      covs[i] = &beliefs_[i].cov;
+      dx.col(decltype(i)::value) = state_difference(model_of(i), detail::point(belief(i)), ref_point);
+      covs[i] = &belief(i).cov;
     });
     const Vector<N> m = dx.lazyProduct(mu_);
     Belief out;
@@ -406,6 +409,19 @@ class Imm {
   }
 
   template <class J>
+  auto& belief(J j) {
+    return buffers_[current_[J::value]][j];
+  }
+  template <class J>
+  const auto& belief(J j) const {
+    return buffers_[current_[J::value]][j];
+  }
+  template <class J>
+  auto& spare(J j) {
+    return buffers_[current_[J::value] ^ 1u][j];
+  }
+
+  template <class J>
   const auto& model_of(J j) const {
     return modes_[j].model;
   }
@@ -413,7 +429,7 @@ class Imm {
   State point_of(int index) const {
     State out{};
     hana::for_each(indices(), [&](auto i) {
-      if (decltype(i)::value == index) out = detail::point(beliefs_[i]);
+      if (decltype(i)::value == index) out = detail::point(belief(i));
     });
     return out;
   }
@@ -474,7 +490,10 @@ class Imm {
 
   Mixing mixing_;
   hana::tuple<Modes...> modes_;
-  hana::tuple<detail::BeliefOf<typename Modes::ProcessModelType>...> beliefs_;
+  // Two belief buffers per mode; current_[j] says which one holds mode j's belief. A step
+  // writes the other one and commits by flipping the index: no covariance is copied.
+  std::array<hana::tuple<detail::BeliefOf<typename Modes::ProcessModelType>...>, 2> buffers_;
+  std::array<unsigned char, R> current_{};
   Probabilities mu_;
   Probabilities c_;
   Probabilities log_lik_;

@@ -97,7 +97,10 @@ struct Ins15Model {
     out.p = x.p + x.v * dt + 0.5 * acc_n * dt * dt;
     out.v = x.v + acc_n * dt;
     const Eigen::Vector3d wdt = w * dt;
-    out.q = (x.q * so3::exp_quat(wdt)).normalized();
+    Eigen::Quaterniond q_step;
+    Eigen::Matrix3d Jr_step;
+    so3::exp_quat_and_right_jacobian(wdt, q_step, Jr_step);
+    out.q = (x.q * q_step).normalized();
     const double kg = gyro_bias.decay(dt), ka = accel_bias.decay(dt);
     out.bg = kg * x.bg;
     out.ba = ka * x.ba;
@@ -112,8 +115,8 @@ struct Ins15Model {
       L::cov<"p", "ba">(*F) = -0.5 * dt * dt * R;
       L::cov<"v", "theta">(*F) = -dt * R_ax;
       L::cov<"v", "ba">(*F) = -dt * R;
-      L::cov<"theta", "theta">(*F) = so3::exp(wdt).transpose();
-      L::cov<"theta", "bg">(*F) = -dt * so3::right_jacobian(wdt);
+      L::cov<"theta", "theta">(*F) = q_step.toRotationMatrix().transpose();
+      L::cov<"theta", "bg">(*F) = -dt * Jr_step;
       L::cov<"bg", "bg">(*F).diagonal().setConstant(kg);
       L::cov<"ba", "ba">(*F).diagonal().setConstant(ka);
     }

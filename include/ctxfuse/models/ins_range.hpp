@@ -11,6 +11,7 @@ namespace ctxfuse::models {
 template <class ErrorLayout = Ins15Layout>
 struct InsRange {
   static constexpr int dim = 1;
+  static constexpr auto jacobian_columns = column_pattern<ErrorLayout>({"p", "theta"});
   Eigen::Vector3d anchor = Eigen::Vector3d::Zero();
   Eigen::Vector3d lever_arm = Eigen::Vector3d::Zero();
   double sigma = 0.1;
