@@ -2,15 +2,15 @@
 // mean error per region of the single sensors, single sub-models, FKF, plain IMM and the
 // region-aware IMM; X/Y RMSE) with ours side by side, on the simulated drive.
 // Training and validation of the recogniser use other simulated drives (training: seeds
-// + 101, + 102 and + 103; validation: seed + 202), the test is the demo drive, as the paper trains, validates and tests on
-// separate data.
+// + 101, + 102 and + 103; validation: seed + 202), the test is the demo drive, as the paper
+// trains, validates and tests on separate data.
 #include <array>
 #include <cstdint>
 #include <cstdio>
-#include <span>
-#include <vector>
 #include <ostream>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "cli/plot.hpp"
 #include "cli/registry.hpp"
