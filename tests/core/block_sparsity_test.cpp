@@ -66,14 +66,26 @@ models::InsState state() {
   return x;
 }
 
-TEST(BlockSparsity, InsPatternsCoverTheirJacobians) {
-  models::Ins15Model m;
-  m.gyro_bias.tau = 100.0;
+// F of the 15-state INS model at state() for a turning, accelerating step of 0.05 s.
+SquareMatrix<15> ins_transition(const models::Ins15Model& m) {
   models::ImuSample u;
   u.gyro = {0.2, -0.1, 0.4};
   u.accel = {1, 2, 9};
   SquareMatrix<15> F;
   m.predict(state(), u, 0.05, &F);
+  return F;
+}
+
+// A random symmetric positive semi-definite 15 x 15 covariance.
+SquareMatrix<15> random_covariance() {
+  const SquareMatrix<15> A = SquareMatrix<15>::Random();
+  return A * A.transpose();
+}
+
+TEST(BlockSparsity, InsPatternsCoverTheirJacobians) {
+  models::Ins15Model m;
+  m.gyro_bias.tau = 100.0;
+  const SquareMatrix<15> F = ins_transition(m);
   expect_covered<models::Ins15Model::transition_blocks>(F);
   Vector<15> dx = Vector<15>::LinSpaced(15, -0.1, 0.1);
   expect_covered<models::Ins15Model::reset_blocks>(m.reset_jacobian(state(), dx));
@@ -99,14 +111,8 @@ TEST(BlockSparsity, KinematicPatternsCoverTheirJacobians) {
 }
 
 TEST(BlockSparsity, SparseCongruenceEqualsDense) {
-  models::Ins15Model m;
-  models::ImuSample u;
-  u.gyro = {0.2, -0.1, 0.4};
-  u.accel = {1, 2, 9};
-  SquareMatrix<15> F;
-  m.predict(state(), u, 0.05, &F);
-  SquareMatrix<15> A = SquareMatrix<15>::Random();
-  const SquareMatrix<15> P = A * A.transpose();
+  const SquareMatrix<15> F = ins_transition(models::Ins15Model{});
+  const SquareMatrix<15> P = random_covariance();
   const SquareMatrix<15> dense = F * P * F.transpose();
   EXPECT_LT((congruence<models::Ins15Model::transition_blocks>(F, P) - dense).cwiseAbs().maxCoeff(), 1e-12);
 }
@@ -116,8 +122,7 @@ TEST(BlockSparsity, BlockDiagonalResetEqualsDenseCongruence) {
   Vector<15> dx = Vector<15>::Zero();
   L::get<"theta">(dx) = Eigen::Vector3d(0.3, -0.2, 0.5);
   const SquareMatrix<15> G = m.reset_jacobian(state(), dx);
-  SquareMatrix<15> A = SquareMatrix<15>::Random();
-  const SquareMatrix<15> P = A * A.transpose();
+  const SquareMatrix<15> P = random_covariance();
   const Eigen::MatrixXd dense = Eigen::MatrixXd(G) * Eigen::MatrixXd(P) * Eigen::MatrixXd(G).transpose();
   static_assert(is_block_diagonal(models::Ins15Model::reset_blocks));
   static_assert(!is_block_diagonal(models::Ins15Model::transition_blocks));
@@ -140,14 +145,8 @@ TEST(BlockSparsity, BlockDiagonalResetEqualsDenseCongruence) {
 }
 
 TEST(BlockSparsity, LowerCongruenceLeavesTheUpperTriangleAlone) {
-  models::Ins15Model m;
-  models::ImuSample u;
-  u.gyro = {0.2, -0.1, 0.4};
-  u.accel = {1, 2, 9};
-  SquareMatrix<15> F;
-  m.predict(state(), u, 0.05, &F);
-  SquareMatrix<15> A = SquareMatrix<15>::Random();
-  const SquareMatrix<15> P = A * A.transpose();
+  const SquareMatrix<15> F = ins_transition(models::Ins15Model{});
+  const SquareMatrix<15> P = random_covariance();
   const Eigen::MatrixXd dense = Eigen::MatrixXd(F) * Eigen::MatrixXd(P) * Eigen::MatrixXd(F).transpose();
   SquareMatrix<15> out = SquareMatrix<15>::Constant(-7.0);
   congruence_lower<models::Ins15Model::transition_blocks>(F, P, out);

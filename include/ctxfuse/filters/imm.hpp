@@ -212,24 +212,10 @@ class Imm {
     for (int j = 0; j < R; ++j)
       for (int i = 0; i < R; ++i) w(i, j) = c(j) > 0.0 ? P(i, j) * mu_(i) / c(j) : (i == j ? 1.0 : 0.0);
 
-    const int ref = most_probable();
-    const State ref_point = point_of(ref);
-    Matrix<N, R> dx;
-    std::array<const SquareMatrix<N>*, R> covs;
-    hana::for_each(indices(), [&](auto i) {
-      dx.col(decltype(i)::value) = state_difference(model_of(i), detail::point(belief(i)), ref_point);
-      covs[i] = &belief(i).cov;
-    });
+    const Spread spread = spread_around_most_probable();
     // The mixed beliefs need every P_i, so they are built in the spare buffers (lower
     // triangles, one pass each) and the buffers are swapped once all are done.
-    hana::for_each(indices(), [&](auto j) {
-      constexpr int jj = decltype(j)::value;
-      auto& out = spare(j);
-      const Vector<N> mixed_dx = dx.lazyProduct(w.col(jj));
-      moment_match_lower(covs, dx, mixed_dx, w.col(jj), out.cov);
-      symmetrize(out.cov);
-      detail::point(out) = state_inject(model_of(j), ref_point, mixed_dx);
-    });
+    hana::for_each(indices(), [&](auto j) { match_into(model_of(j), spread, w.col(decltype(j)::value), spare(j)); });
     for (auto& b : current_) b ^= 1u;
     c_ = c;
     log_lik_.setZero();
@@ -331,19 +317,8 @@ class Imm {
   /// Moment-matched combination of the mode estimates (around the most probable mode's point
   /// for error-state modes).
   Belief combined() const {
-    const int ref = most_probable();
-    const State ref_point = point_of(ref);
-    Matrix<N, R> dx;
-    std::array<const SquareMatrix<N>*, R> covs;
-    hana::for_each(indices(), [&](auto i) {
-      dx.col(decltype(i)::value) = state_difference(model_of(i), detail::point(belief(i)), ref_point);
-      covs[i] = &belief(i).cov;
-    });
-    const Vector<N> m = dx.lazyProduct(mu_);
     Belief out;
-    moment_match_lower(covs, dx, m, mu_, out.cov);
-    symmetrize(out.cov);
-    detail::point(out) = state_inject(modes_[hana::size_c<0>].model, ref_point, m);
+    match_into(modes_[hana::size_c<0>].model, spread_around_most_probable(), mu_, out);
     return out;
   }
 
@@ -373,6 +348,33 @@ class Imm {
   // Lower triangle of sum_i w_i (P_i + d_i d_i') with d_i = dx_i - m, in one pass per column:
   // the weighted covariances and the rank-R spread of the means together, accumulated in
   // registers (the textbook sum, without a pass over the whole matrix per term).
+  /// The mode estimates as differences from the most probable mode's point (error-state modes
+  /// mix in that mode's tangent space), with their covariances: what every moment match reads.
+  struct Spread {
+    State ref_point;
+    Matrix<N, R> dx;
+    std::array<const SquareMatrix<N>*, R> covs;
+  };
+  Spread spread_around_most_probable() const {
+    Spread sp;
+    sp.ref_point = point_of(most_probable());
+    hana::for_each(indices(), [&](auto i) {
+      sp.dx.col(decltype(i)::value) = state_difference(model_of(i), detail::point(belief(i)), sp.ref_point);
+      sp.covs[i] = &belief(i).cov;
+    });
+    return sp;
+  }
+
+  /// The moment-matched belief of the modes under `weights` (a column of the mixing weights,
+  /// or the mode probabilities), written into `out`.
+  template <class Model, class WeightExpr>
+  static void match_into(const Model& model, const Spread& sp, const WeightExpr& weights, Belief& out) {
+    const Vector<N> mean_dx = sp.dx.lazyProduct(weights);
+    moment_match_lower(sp.covs, sp.dx, mean_dx, weights, out.cov);
+    symmetrize(out.cov);
+    detail::point(out) = state_inject(model, sp.ref_point, mean_dx);
+  }
+
   template <class MeanExpr, class WeightExpr>
   static void moment_match_lower(const std::array<const SquareMatrix<N>*, R>& covs, const Matrix<N, R>& dx,
                                  const MeanExpr& m, const WeightExpr& w, SquareMatrix<N>& out) {
