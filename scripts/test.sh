@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Configures, builds and runs the whole test suite:  scripts/test.sh [preset]
-# preset: release (default, g++), clang or debug-asan (see CMakePresets.json); build tree
-# build/<preset>. Prints ctest's summary; the exit status is ctest's (or the build's, when the
-# build fails). Honours CTXFUSE_DATA_DIR (the shared/data folder; default ../shared/data next
-# to the repository) and CI=true (missing data fails instead of skipping).
+# preset: release (default, g++), clang, release-v3, clang-v3 or debug-asan (see
+# CMakePresets.json); build tree build/<preset>. Prints ctest's summary; the exit status is
+# ctest's (or the build's, when the build fails). Honours CTXFUSE_DATA_DIR (the shared/data
+# folder; default ../shared/data next to the repository) and CI=true (missing data fails
+# instead of skipping).
 set -euo pipefail
 
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"

@@ -18,9 +18,20 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 using L = Layout<Block<"p", 2>, Block<"v", 2>>;
 using Cv = models::ConstantVelocity<L, 2>;
 
-template <class T>
-bool same_bytes(const T& a, const T& b) {
-  return std::memcmp(static_cast<const void*>(&a), static_cast<const void*>(&b), sizeof(T)) == 0;
+// Bit-for-bit equality of the values (so that -0.0 vs 0.0 or a changed NaN payload counts).
+// Dense Eigen objects only: a struct's padding bytes are not part of its value, and structs
+// such as InsState have padding once AVX aligns their quaternion to 32 bytes (x86-64-v3).
+template <class Derived>
+bool same_bytes(const Eigen::DenseBase<Derived>& a, const Eigen::DenseBase<Derived>& b) {
+  return std::memcmp(a.derived().data(), b.derived().data(), sizeof(typename Derived::Scalar) * static_cast<std::size_t>(a.size())) == 0;
+}
+template <int N>
+bool same_bytes(const Gaussian<N>& a, const Gaussian<N>& b) {
+  return same_bytes(a.mean, b.mean) && same_bytes(a.cov, b.cov);
+}
+bool same_bytes(const models::InsState& a, const models::InsState& b) {
+  return same_bytes(a.p, b.p) && same_bytes(a.v, b.v) && same_bytes(a.q.coeffs(), b.q.coeffs()) &&
+         same_bytes(a.bg, b.bg) && same_bytes(a.ba, b.ba);
 }
 
 Gaussian<4> prior() {
