@@ -323,18 +323,30 @@ inline models::PlanarBodyVelocity speed_meas(const Settings& s, double factor = 
 /// The GNSS and UWB health of one filter, and the recovery from a lock-out of either.
 struct FilterHealth {
   policies::SourceHealth gnss, uwb;
+  bool gnss_locked_out = false;  // at the last lockout() that returned true
   explicit FilterHealth(const Settings& s) : gnss(s.health), uwb(s.health) {}
   /// True (and the counts restarted) when either source is locked out at time t.
   bool lockout(double t) {
-    if (!gnss.lockout(t) && !uwb.lockout(t)) return false;
+    gnss_locked_out = gnss.lockout(t);
+    if (!gnss_locked_out && !uwb.lockout(t)) return false;
     gnss.recovered();
     uwb.recovered();
     return true;
   }
+  /// The position standard deviation a recovery at GNSS epoch `e` needs to reach the fix from
+  /// `p`: a filter that ran away from the fixes has to be able to take them again. Leaving a
+  /// garage, NLOS ranges whose bias grew smoothly with the distance from the door passed the
+  /// gates as motion and left a velocity error; a fixed 2 m widening then took 20 s of
+  /// repeated lock-outs to reach fixes 20-40 m away (scenario "paper", seed 1).
+  double reach(const sim::GnssEpoch& e, const Eigen::Vector2d& p) const {
+    return gnss_locked_out && e.has_fix ? (Eigen::Vector2d(e.position.head<2>()) - p).norm() : 0.0;
+  }
 };
 
-inline void widen(SquareMatrix<L::size>& P, const Settings& s) {
-  policies::widen_block<L, "p">(P, s.recovery_position_sigma);
+/// Recovery after a lock-out: position and velocity uncertainty added, the position's at least
+/// `reach` (FilterHealth::reach).
+inline void widen(SquareMatrix<L::size>& P, const Settings& s, double reach = 0.0) {
+  policies::widen_block<L, "p">(P, std::max(s.recovery_position_sigma, reach));
   policies::widen_block<L, "v">(P, s.recovery_velocity_sigma);
 }
 
@@ -459,14 +471,14 @@ struct UwbOnly {
   static constexpr double kDisagreement = 13.8155;  // chi-square 0.999 quantile, 2 dof
   const sim::Drive& d;
   const Settings& s;
-  Track track;
-  std::optional<Ekf<Cv, ChiSquareGate>> f;
+  Track track{};
+  std::optional<Ekf<Cv, ChiSquareGate>> f{};
   policies::SourceHealth health{s.health};
   bool locked = false;
   double last_range_t = -1e9;
   Eigen::Vector2d held = Eigen::Vector2d::Zero();
   double now = 0.0;
-  std::vector<sim::UwbRange> epoch_ranges;  // the ranges of the current time stamp so far
+  std::vector<sim::UwbRange> epoch_ranges{};  // the ranges of the current time stamp so far
   void start(double t0, const Eigen::Vector2d& p0) {
     Cv cv;
     cv.accel_psd = s.uwb_alone_accel_psd;
@@ -554,7 +566,7 @@ struct SingleModel {
     record(track, d, e, L::get<"p">(f->belief().mean));
     if (health.lockout(e.t)) {
       auto b = f->belief();
-      widen(b.cov, s);
+      widen(b.cov, s, health.reach(e, L::get<"p">(b.mean)));
       f->reset(b);
     }
   }
@@ -592,7 +604,7 @@ struct Federated {
     record(track, d, e, L::get<"p">(f->global().mean));
     if (health.lockout(e.t)) {
       auto g = f->global();
-      widen(g.cov, s);
+      widen(g.cov, s, health.reach(e, L::get<"p">(g.mean)));
       f->reset(g);
     }
   }
@@ -624,6 +636,12 @@ struct ImmSink {
   Track track;
   std::optional<RegionImm<Mixing>> f;
   std::array<FilterHealth, 3> health{FilterHealth{s}, FilterHealth{s}, FilterHealth{s}};
+  // The IMM as a whole: a source that every mode taking it has gated. Recovering only those
+  // modes is not enough when the dominant mode does not take the source, as the next mixing
+  // re-centres them on it: leaving a garage whose anchors are all inside (scenario "paper",
+  // seed 1), EKF-IDR stayed dominant, ODR and I-OTR gated every fix and the estimate drifted
+  // to 100 m. A lock-out of the IMM widens every mode.
+  FilterHealth imm_health{s};
   std::size_t epoch = 0;
   int region = -1;
 
@@ -661,8 +679,16 @@ struct ImmSink {
   }
   // Each mode keeps its own health: a mode that has locked itself out recovers alone.
   void record_health(double t, const imm::UpdateResult<3>& result, bool gnss) {
-    for (std::size_t j = 0; j < 3; ++j)
-      if (result.taken[j]) (gnss ? health[j].gnss : health[j].uwb).record(t, result.mode[j]);
+    const Status* any_accepted = nullptr;
+    const Status* any_gated = nullptr;
+    for (std::size_t j = 0; j < 3; ++j) {
+      if (!result.taken[j]) continue;
+      (gnss ? health[j].gnss : health[j].uwb).record(t, result.mode[j]);
+      if (result.mode[j].accepted()) any_accepted = &result.mode[j];
+      if (result.mode[j].outcome == Outcome::gated) any_gated = &result.mode[j];
+    }
+    // Accepted by one taker is accepted by the IMM; gated by the IMM only when no taker took it.
+    if (const Status* st = any_accepted ? any_accepted : any_gated) (gnss ? imm_health.gnss : imm_health.uwb).record(t, *st);
   }
   void gnss(const sim::GnssEpoch& e) {
     const auto m = boost::hana::make_tuple(gnss_meas(e, s), gnss_meas(e, s, s.iotr_noise_factor), gnss_meas(e, s));
@@ -671,9 +697,19 @@ struct ImmSink {
   void epoch_done(const sim::GnssEpoch& e) {
     f->update_mode_probabilities();
     record(track, d, e, L::get<"p">(f->combined().mean), f->most_probable());
+    const bool imm_lockout = imm_health.lockout(e.t);
     boost::hana::for_each(boost::hana::make_tuple(boost::hana::int_c<0>, boost::hana::int_c<1>, boost::hana::int_c<2>),
                           [&](auto j) {
-                            if (health[static_cast<std::size_t>(j.value)].lockout(e.t)) widen(f->template mode_belief<j.value>().cov, s);
+                            auto& h = health[static_cast<std::size_t>(j.value)];
+                            const bool own = h.lockout(e.t);
+                            if (!own && !imm_lockout) return;
+                            if (imm_lockout) {  // the mode's own counts restart with the IMM's
+                              h.gnss.recovered();
+                              h.uwb.recovered();
+                            }
+                            auto& b = f->template mode_belief<j.value>();
+                            const Eigen::Vector2d p = L::get<"p">(b.mean);
+                            widen(b.cov, s, std::max(own ? h.reach(e, p) : 0.0, imm_lockout ? imm_health.reach(e, p) : 0.0));
                           });
     // Next cycle: the region recognised at this epoch (the latest known) routes the
     // measurements until the next epoch.
@@ -697,7 +733,7 @@ inline Track run(const sim::Drive& d, Estimator e, const Settings& s, const std:
       return sink.track;
     }
     case Estimator::uwb: {
-      detail::UwbOnly sink{d, s, {}, {}};
+      detail::UwbOnly sink{.d = d, .s = s};
       detail::replay(d, sink);
       return sink.track;
     }

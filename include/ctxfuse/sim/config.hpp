@@ -35,6 +35,10 @@ struct RouteConfig {
   /// Clear height of the garage doorway (10 m wide): satellites low in the west stay visible
   /// through it for the first metres inside.
   double garage_door_height_m = 3.0;
+  /// UWB anchors in the covered approach (two, 8 m from the garage door). Without them every
+  /// anchor is inside the garage and the approach sees the garage's anchors only through the
+  /// doorway or the garage wall (scenario "paper", sim/scenarios.hpp).
+  bool approach_uwb_anchors = true;
 };
 
 /// MEMS IMU error model per axis: white noise given as a density, first-order Gauss-Markov
@@ -122,6 +126,13 @@ struct UwbConfig {
   double first_path_gap_los_db = 1.5;   // rssi - rssi_fp in line of sight (plus |N(0,1)|)
   double first_path_gap_nlos_min_db = 6.0;
   double first_path_gap_nlos_max_db = 12.0;
+  /// The garage's outer walls (thick concrete) opaque to UWB. Off: a range whose line crosses
+  /// a wall is NLOS with a bias drawn in [nlos_bias_min_m, nlos_bias_max_m]. On: between a point
+  /// inside the garage and one outside it, when the straight line does not pass through the
+  /// doorway, the first path to arrive is the one diffracted round the nearer door jamb, so the
+  /// range is that path's length (the bias is its excess over the straight line, pure
+  /// geometry); it is NLOS, limited by max_range_nlos_m on the path length.
+  bool garage_walls_opaque = false;
 };
 
 struct SpeedConfig {

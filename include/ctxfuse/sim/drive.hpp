@@ -8,7 +8,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numbers>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -435,6 +437,24 @@ inline void simulate_gnss(Drive& d) {
   });
 }
 
+/// With the garage's outer walls opaque to UWB: the length of the first path between a and b
+/// when one is inside the garage and the other outside and the straight line does not pass
+/// through the doorway, i.e. the path bent round the nearer door jamb (a vertical edge: the
+/// horizontal legs add up, the height difference is covered along the way). Nothing when the
+/// two are on the same side or the straight line passes through the opening.
+inline std::optional<double> doorway_path_length(const World& world, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const Eigen::Vector2d a2 = a.head<2>(), b2 = b.head<2>();
+  if ((world.region_at(a2) == Region::indoor) == (world.region_at(b2) == Region::indoor)) return std::nullopt;
+  if (segments_cross(a2, b2, world.garage_door.a, world.garage_door.b)) return std::nullopt;
+  const double dz = a.z() - b.z();
+  double path = std::numeric_limits<double>::infinity();
+  for (const Eigen::Vector2d& jamb : {world.garage_door.a, world.garage_door.b}) {
+    const double horizontal = (a2 - jamb).norm() + (jamb - b2).norm();
+    path = std::min(path, std::sqrt(horizontal * horizontal + dz * dz));
+  }
+  return path;
+}
+
 inline void simulate_uwb(Drive& d) {
   const auto& c = d.config.uwb;
   Rng rng(d.config.seed, Stream::uwb);
@@ -460,14 +480,27 @@ inline void simulate_uwb(Drive& d) {
       const double u_gap = rng.uniform(), n_range = rng.normal(), n_extra = rng.normal(), n_rssi = rng.normal(),
                    n_gap = rng.normal();
       transient[a] = transient[a] ? !(u_chain < p_exit) : (u_chain < p_enter);
-      const int walls = world.walls_crossed(p2, anchor.position.head<2>());
+      const Eigen::Vector2d a2 = anchor.position.head<2>();
+      int walls = world.walls_crossed(p2, a2);
+      const double true_range = (anchor.position - tag).norm();
+      // Opaque garage walls: the first path between inside and outside is the one bent round
+      // a door jamb (vertical edge), unless the straight line passes through the opening.
+      double door_excess = 0.0;
+      bool door_path = false;
+      if (c.garage_walls_opaque) {
+        if (const auto path = doorway_path_length(world, anchor.position, tag)) {
+          door_excess = *path - true_range;
+          door_path = true;
+          walls = std::max(walls, 1);
+        }
+      }
       const bool nlos = walls > 0 || transient[a];
       if (nlos && !was_nlos[a]) episode_bias[a] = c.nlos_bias_min_m + (c.nlos_bias_max_m - c.nlos_bias_min_m) * u_bias;
       was_nlos[a] = nlos;
-      const double true_range = (anchor.position - tag).norm();
+      const double path_length = true_range + door_excess;
       const double max_range = nlos ? c.max_range_nlos_m : c.max_range_los_m;
-      if (true_range > max_range) continue;
-      const double x = true_range / max_range;
+      if (path_length > max_range) continue;
+      const double x = path_length / max_range;
       if (u_drop < c.dropout_at_zero + (c.dropout_at_max - c.dropout_at_zero) * x * x) continue;
       UwbRange r;
       r.t = t;
@@ -476,10 +509,10 @@ inline void simulate_uwb(Drive& d) {
       r.true_range_m = true_range;
       r.nlos = nlos;
       r.walls_crossed = walls;
-      r.nlos_bias_m = nlos ? episode_bias[a] : 0.0;
+      r.nlos_bias_m = door_path ? door_excess : nlos ? episode_bias[a] : 0.0;
       r.range_m = true_range + r.nlos_bias_m + c.range_noise_m * n_range + (nlos ? c.nlos_extra_noise_m * n_extra : 0.0);
       const double wall_loss = walls > 0 ? walls * (c.wall_loss_min_db + (c.wall_loss_max_db - c.wall_loss_min_db) * u_loss) : 0.0;
-      r.rssi_dbm = c.rssi_at_1m_dbm - 20.0 * std::log10(std::max(1.0, true_range)) - wall_loss + c.rssi_noise_db * n_rssi;
+      r.rssi_dbm = c.rssi_at_1m_dbm - 20.0 * std::log10(std::max(1.0, path_length)) - wall_loss + c.rssi_noise_db * n_rssi;
       const double gap = nlos ? c.first_path_gap_nlos_min_db + (c.first_path_gap_nlos_max_db - c.first_path_gap_nlos_min_db) * u_gap
                               : c.first_path_gap_los_db + std::abs(n_gap);
       r.rssi_first_path_dbm = r.rssi_dbm - gap;

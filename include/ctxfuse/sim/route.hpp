@@ -307,12 +307,16 @@ inline Route build_route(const RouteConfig& cfg, const RouteLayout& lay) {
       wall(x + 0.4, y + 0.4, x - 0.4, y + 0.4);
       wall(x - 0.4, y + 0.4, x - 0.4, y - 0.4);
     }
-  // UWB anchors: four garage corners, one mid-garage on the east wall, two at the approach.
+  // UWB anchors: four garage corners, one mid-garage on the east wall, two at the approach
+  // (unless RouteConfig::approach_uwb_anchors is off).
   const double za = 2.8;
   w.anchors = {{0, {3.0, garage_half - 3.0, za}},  {1, {3.0, -garage_half + 3.0, za}},
                {2, {garage_east - 3.0, garage_half - 3.0, za}}, {3, {garage_east - 3.0, -garage_half + 3.0, za}},
-               {4, {garage_east - 1.0, 0.0, za}}, {5, {-8.0, approach_half - 1.0, 3.0}},
-               {6, {-8.0, -approach_half + 1.0, 3.0}}};
+               {4, {garage_east - 1.0, 0.0, za}}};
+  if (cfg.approach_uwb_anchors) {
+    w.anchors.push_back({5, {-8.0, approach_half - 1.0, 3.0}});
+    w.anchors.push_back({6, {-8.0, -approach_half + 1.0, 3.0}});
+  }
   return route;
 }
 
