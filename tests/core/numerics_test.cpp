@@ -162,6 +162,34 @@ TEST(Numerics, SymmetrizeAndAddLowerMatchEigenTriangularViews) {
     for (int i = 0; i < 15; ++i) EXPECT_EQ(sum(i, j), i >= j ? A(i, j) + Q(i, j) : A(i, j)) << i << "," << j;
 }
 
+template <int N, int Options = Eigen::ColMajor>
+void expect_symmetrize_matches_the_triangular_view() {
+  using Mat = Eigen::Matrix<double, N, N, Options>;
+  const Mat A = Mat::Random();
+  Mat mirrored = A;
+  symmetrize(mirrored);
+  Mat expected = A;
+  expected.template triangularView<Eigen::StrictlyUpper>() = A.transpose();
+  EXPECT_EQ(mirrored, expected) << N << " x " << N << (Options == Eigen::RowMajor ? ", row-major" : "");
+}
+
+// Every size the straight-line path takes, the row-major fallback, and a block view.
+TEST(Numerics, SymmetrizeMatchesTheTriangularViewForEverySizeAndStorage) {
+  std::srand(29);
+  expect_symmetrize_matches_the_triangular_view<1>();
+  expect_symmetrize_matches_the_triangular_view<2>();
+  expect_symmetrize_matches_the_triangular_view<8>();
+  expect_symmetrize_matches_the_triangular_view<20>();
+  expect_symmetrize_matches_the_triangular_view<6, Eigen::RowMajor>();
+  SquareMatrix<6> big = SquareMatrix<6>::Random();
+  const SquareMatrix<6> before = big;
+  auto corner = big.topLeftCorner<3, 3>();
+  symmetrize(corner);
+  for (int j = 0; j < 6; ++j)
+    for (int i = 0; i < 6; ++i)
+      EXPECT_EQ(big(i, j), (i < j && j < 3) ? before(j, i) : before(i, j)) << i << "," << j;
+}
+
 TEST(Numerics, LowerMinusProductEqualsDenseFormula) {
   std::srand(29);
   const SquareMatrix<15> P(random_spd(15, 31));

@@ -58,28 +58,17 @@ std::string fmt1(const char* f, double a) {
 
 void run_section(const DemoContext& ctx, Json& json, std::ostream& out) {
   const sim::Drive& test = *ctx.drive;
-  // Three training drives: one drive's 540 epochs leave the SVM's (C, gamma) search free to
-  // fit that drive's particular sky (the PSO then runs to the edges of its box and the SVM
-  // generalises worse than the HMM); the HMM takes each drive as its own sequence.
-  constexpr std::uint64_t kTrainSeedOffset = 101, kTrainDrives = 3, kValidateSeedOffset = 202;
-  std::vector<ri::FeatureSeries> f_train;
-  for (std::uint64_t k = 0; k < kTrainDrives; ++k) {
-    sim::DriveConfig cfg = test.config;
-    cfg.seed = test.config.seed + kTrainSeedOffset + k;
-    f_train.push_back(ri::gnss_features(sim::simulate_drive(cfg)));
-  }
-  sim::DriveConfig validate_cfg = test.config;
-  validate_cfg.seed = test.config.seed + kValidateSeedOffset;
-  const sim::Drive validate = sim::simulate_drive(validate_cfg);
+  using Drives = ri::TrainingDrives;
 
   // ---- Table 2: recognition.
-  const auto f_val = ri::gnss_features(validate), f_test = ri::gnss_features(test);
-  const ri::Recogniser rec = ri::train_recogniser(std::span<const ri::FeatureSeries>(f_train), f_val);
+  const auto f_test = ri::gnss_features(test);
+  const ri::Recogniser rec = ri::train_recogniser_for(test);
   const ri::Recognition r = ri::recognise(rec, f_test);
   const double acc_svm = ri::accuracy(f_test.truth, r.svm), acc_hmm = ri::accuracy(f_test.truth, r.hmm),
                acc_joint = ri::accuracy(f_test.truth, r.joint);
-  out << "Region recognition on the demo drive (" << f_test.x.size() << " GNSS epochs; trained on seeds " << test.config.seed + kTrainSeedOffset
-      << "-" << test.config.seed + kTrainSeedOffset + kTrainDrives - 1 << ", validated on seed " << validate_cfg.seed << "; PSO-SVM C=" << fmt("%.3g, gamma=%.3g", rec.tuned.C, rec.tuned.gamma)
+  out << "Region recognition on the demo drive (" << f_test.x.size() << " GNSS epochs; trained on seeds " << test.config.seed + Drives::train_seed_offset
+      << "-" << test.config.seed + Drives::train_seed_offset + Drives::train_drives - 1 << ", validated on seed "
+      << test.config.seed + Drives::validate_seed_offset << "; PSO-SVM C=" << fmt("%.3g, gamma=%.3g", rec.tuned.C, rec.tuned.gamma)
       << ", CV accuracy " << fmt1("%.2f %%", 100.0 * rec.tuned.cv_accuracy) << ")\n";
   out << "  classifier   paper    ours\n";
   out << "  PSO-SVM    " << fmt("%6.2f %%  %6.2f %%\n", 95.96, 100.0 * acc_svm);
