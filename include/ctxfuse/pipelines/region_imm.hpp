@@ -710,7 +710,7 @@ struct ImmSink {
       if (result.mode[j].accepted()) any_accepted = &result.mode[j];
       if (result.mode[j].outcome == Outcome::gated) any_gated = &result.mode[j];
     }
-    // Accepted by one taker is accepted by the IMM; gated by the IMM only when no taker took it.
+    // Accepted by one taker is accepted by the IMM; gated by the IMM only when no taker accepted it.
     if (const Status* st = any_accepted ? any_accepted : any_gated) (gnss ? imm_health.gnss : imm_health.uwb).record(t, *st);
   }
   void gnss(const sim::GnssEpoch& e) {
