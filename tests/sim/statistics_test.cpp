@@ -285,7 +285,9 @@ TEST(SimGnss, FeatureDistributionsOverlapAsConfigured) {
         EXPECT_LE(std::abs(p.y() + run * std::cos(az)), 5.0 + 1e-9);
         const double top = std::atan((c.route.garage_door_height_m - c.gnss.antenna_height_m) / run) / kDeg;
         EXPECT_LE(s.elevation_deg, top + c.gnss.diffraction_band_deg + 1e-9);
-        if (s.elevation_deg > top + 1e-9) EXPECT_FALSE(s.line_of_sight);
+        if (s.elevation_deg > top + 1e-9) {
+          EXPECT_FALSE(s.line_of_sight);
+        }
       }
     }
   }
