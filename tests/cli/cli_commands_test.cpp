@@ -3,35 +3,19 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <sys/wait.h>
-
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 
+#include "support/run_cli.hpp"
+
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int code = -1;
-  std::string output;  // stdout and stderr together
-};
-
-Result run(const std::string& args) {
-  const std::string cmd = std::string("\"") + CTXFUSE_CLI_PATH + "\" " + args + " 2>&1";
-  Result r;
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  char buf[4096];
-  std::size_t n;
-  while ((n = fread(buf, 1, sizeof buf, pipe)) > 0) r.output.append(buf, n);
-  const int status = pclose(pipe);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
-  return r;
-}
+ctxfuse::test::CliRun run(const std::string& args) { return ctxfuse::test::run_cli(args); }
 
 // One folder per process: ctest runs test cases in parallel processes (and several build
 // trees may test at once), so a fixed name would let one test rewrite another's logs.
@@ -61,7 +45,7 @@ const fs::path& logs() {
   static const fs::path dir = [] {
     auto d = scratch("logs");
     const auto r = run("sim --seed 4 --out \"" + d.string() + "\"");
-    EXPECT_EQ(r.code, 0) << r.output;
+    EXPECT_EQ(r.code, 0) << r.out;
     return d;
   }();
   return dir;
@@ -79,16 +63,16 @@ TEST(CliSim, WritesAllSevenLogs) {
 TEST(CliSim, UsageErrors) {
   auto r = run("sim --seed 1");
   EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.output.find("--out DIR is required"), std::string::npos) << r.output;
+  EXPECT_NE(r.out.find("--out DIR is required"), std::string::npos) << r.out;
   r = run("sim --seed abc --out /tmp/x");
   EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.output.find("--seed expects a non-negative integer, got 'abc'"), std::string::npos) << r.output;
+  EXPECT_NE(r.out.find("--seed expects a non-negative integer, got 'abc'"), std::string::npos) << r.out;
   r = run("sim --bogus 1");
   EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.output.find("unknown option '--bogus'"), std::string::npos) << r.output;
+  EXPECT_NE(r.out.find("unknown option '--bogus'"), std::string::npos) << r.out;
   r = run("sim --duration 5 --out /tmp/x");
   EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.output.find("duration_s"), std::string::npos) << r.output;
+  EXPECT_NE(r.out.find("duration_s"), std::string::npos) << r.out;
 }
 
 TEST(CliRun, GnssBaselineScoresAgainstTruth) {
@@ -96,8 +80,8 @@ TEST(CliRun, GnssBaselineScoresAgainstTruth) {
   fs::create_directories(out);
   const auto r = run("run gnss --data \"" + logs().string() + "\" --json \"" + (out / "r.json").string() + "\" --out \"" +
                      (out / "traj.csv").string() + "\"");
-  ASSERT_EQ(r.code, 0) << r.output;
-  EXPECT_NE(r.output.find("outdoor"), std::string::npos);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("outdoor"), std::string::npos);
   const auto json = slurp(out / "r.json");
   EXPECT_NE(json.find("\"rmse_h_m\""), std::string::npos);
   EXPECT_NE(json.find("\"transition\""), std::string::npos);
@@ -120,9 +104,9 @@ TEST(CliRun, GnssBaselineScoresAgainstTruth) {
 TEST(CliRun, UnknownPipelineListsTheAvailableOnes) {
   const auto r = run("run nosuch --data /tmp");
   EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.output.find("unknown pipeline 'nosuch'"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("available pipelines"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("gnss"), std::string::npos) << r.output;
+  EXPECT_NE(r.out.find("unknown pipeline 'nosuch'"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("available pipelines"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("gnss"), std::string::npos) << r.out;
   EXPECT_EQ(run("run gnss").code, 2);
 }
 
@@ -146,8 +130,8 @@ TEST(CliRun, MalformedLogsNameFileLineAndField) {
     fs::copy(logs(), dir);
     replace_line(dir / c.file, c.line, c.text);
     const auto r = run("run gnss --data \"" + dir.string() + "\"");
-    EXPECT_EQ(r.code, 1) << c.file << ":\n" << r.output;
-    EXPECT_NE(r.output.find(c.expect), std::string::npos) << "expected '" << c.expect << "' in:\n" << r.output;
+    EXPECT_EQ(r.code, 1) << c.file << ":\n" << r.out;
+    EXPECT_NE(r.out.find(c.expect), std::string::npos) << "expected '" << c.expect << "' in:\n" << r.out;
     fs::remove_all(dir);
   }
   // A missing file and a binary file.
@@ -156,13 +140,13 @@ TEST(CliRun, MalformedLogsNameFileLineAndField) {
   fs::remove(dir / "speed.csv");
   auto r = run("run gnss --data \"" + dir.string() + "\"");
   EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.output.find("speed.csv: cannot open for reading"), std::string::npos) << r.output;
+  EXPECT_NE(r.out.find("speed.csv: cannot open for reading"), std::string::npos) << r.out;
   {
     std::ofstream(dir / "speed.csv", std::ios::binary) << std::string("\x00\x01\xff\xfe garbage", 12);
   }
   r = run("run gnss --data \"" + dir.string() + "\"");
   EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.output.find("speed.csv:1: header is"), std::string::npos) << r.output;
+  EXPECT_NE(r.out.find("speed.csv:1: header is"), std::string::npos) << r.out;
   fs::remove_all(dir);
 }
 
@@ -170,8 +154,8 @@ TEST(CliDemo, SummaryJsonAndSectionsNotBuilt) {
   const auto out = scratch("demo");
   fs::create_directories(out);
   const auto r = run("demo --seed 2 --json \"" + (out / "demo.json").string() + "\"");
-  ASSERT_EQ(r.code, 0) << r.output;
-  EXPECT_NE(r.output.find("Simulated drive (seed 2)"), std::string::npos) << r.output;
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("Simulated drive (seed 2)"), std::string::npos) << r.out;
   const auto json = slurp(out / "demo.json");
   EXPECT_NE(json.find("\"drive\""), std::string::npos);
   EXPECT_NE(json.find("\"region_shares\""), std::string::npos);
@@ -180,18 +164,18 @@ TEST(CliDemo, SummaryJsonAndSectionsNotBuilt) {
   int in_json = 0, not_built = 0;
   for (const char* key : {"region_imm", "scene_gins", "nlos_uwb", "phone_gins", "latency_us"})
     in_json += json.find(std::string("\"") + key + "\"") != std::string::npos ? 1 : 0;
-  for (auto pos = r.output.find(": not built\n"); pos != std::string::npos; pos = r.output.find(": not built\n", pos + 1)) ++not_built;
-  EXPECT_EQ(in_json + not_built, 5) << r.output;
+  for (auto pos = r.out.find(": not built\n"); pos != std::string::npos; pos = r.out.find(": not built\n", pos + 1)) ++not_built;
+  EXPECT_EQ(in_json + not_built, 5) << r.out;
   EXPECT_EQ(run("demo --seed -3").code, 2);
 }
 
 TEST(CliDemo, PlotsArePngFilesOrAClearMessage) {
   const auto dir = scratch("plots");
   const auto r = run("demo --seed 1 --plot \"" + dir.string() + "\"");
-  ASSERT_EQ(r.code, 0) << r.output;
-  if (r.output.find("gnuplot not found") != std::string::npos) GTEST_SKIP() << "gnuplot is not installed";
+  ASSERT_EQ(r.code, 0) << r.out;
+  if (r.out.find("gnuplot not found") != std::string::npos) GTEST_SKIP() << "gnuplot is not installed";
   for (const char* f : {"drive_trajectory.png", "gnss_error_cdf.png"}) {
-    ASSERT_TRUE(fs::exists(dir / f)) << f << "\n" << r.output;
+    ASSERT_TRUE(fs::exists(dir / f)) << f << "\n" << r.out;
     EXPECT_EQ(slurp(dir / f).substr(1, 3), "PNG") << f;
   }
 }

@@ -5,8 +5,6 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <sys/wait.h>
-
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -22,6 +20,7 @@
 #include "ctxfuse/pipelines/region_imm.hpp"
 #include "ctxfuse/sim/drive.hpp"
 #include "ctxfuse/sim/scenarios.hpp"
+#include "support/run_cli.hpp"
 
 namespace fs = std::filesystem;
 namespace ri = ctxfuse::pipelines::region_imm;
@@ -29,46 +28,7 @@ namespace sim = ctxfuse::sim;
 
 namespace {
 
-// The ctxfuse binary: given by the build, or next to this test in the build tree
-// (<build>/tests/cli/this -> <build>/tools/ctxfuse).
-std::string cli_path() {
-#ifdef CTXFUSE_CLI_PATH
-  return CTXFUSE_CLI_PATH;
-#else
-  return (fs::read_symlink("/proc/self/exe").parent_path().parent_path().parent_path() / "tools" / "ctxfuse").string();
-#endif
-}
-
-struct Result {
-  int code = -1;
-  std::string out;  // stdout only
-  std::string err;
-};
-
-Result run(const std::string& args) {
-  const fs::path err_file = fs::temp_directory_path() / ("ctxfuse_region_study_err_" + std::to_string(::getpid()));
-  std::string cmd = "\"";
-  cmd += cli_path();
-  cmd += "\" ";
-  cmd += args;
-  cmd += " 2>\"";
-  cmd += err_file.string();
-  cmd += '"';
-  Result r;
-  FILE* pipe = popen(cmd.c_str(), "r");
-  if (!pipe) return r;
-  char buf[4096];
-  std::size_t n;
-  while ((n = fread(buf, 1, sizeof buf, pipe)) > 0) r.out.append(buf, n);
-  const int status = pclose(pipe);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128;
-  std::ifstream e(err_file);
-  std::stringstream s;
-  s << e.rdbuf();
-  r.err = s.str();
-  fs::remove(err_file);
-  return r;
-}
+ctxfuse::test::CliRun run(const std::string& args) { return ctxfuse::test::run_cli(args, ctxfuse::test::Stderr::separate); }
 
 // ---- a small JSON reader (objects, arrays, numbers, strings, booleans), enough for the test
 struct Value {

@@ -5,10 +5,9 @@
 #include <array>
 #include <chrono>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <memory>
-#include <stdexcept>
+#include <optional>
 #include <string>
 
 #include "cli/cli_args.hpp"
@@ -16,9 +15,9 @@
 #include "cli/plot.hpp"
 #include "cli/progress.hpp"
 #include "cli/registry.hpp"
+#include "cli/scenario_flag.hpp"
 #include "ctxfuse/eval/trajectory.hpp"
 #include "ctxfuse/sim/drive.hpp"
-#include "ctxfuse/sim/scenarios.hpp"
 
 namespace ctxfuse::cli {
 namespace {
@@ -127,15 +126,10 @@ int demo_command(Args args, std::ostream& out, std::ostream& err) {
   if (!flags.get_u64("--seed", ctx.seed, err)) return 2;
   const auto t0 = std::chrono::steady_clock::now();
   const std::string scenario = flags.get("--scenario").value_or("default");
-  sim::DriveConfig cfg;
-  try {
-    cfg = sim::scenario_config(scenario);
-  } catch (const std::invalid_argument& e) {
-    err << "ctxfuse demo: " << e.what() << "\n";
-    return 2;
-  }
-  cfg.seed = ctx.seed;
-  const sim::Drive drive = sim::simulate_drive(cfg);
+  std::optional<sim::DriveConfig> cfg = scenario_from_flags(flags, "demo", err);
+  if (!cfg) return 2;
+  cfg->seed = ctx.seed;
+  const sim::Drive drive = sim::simulate_drive(*cfg);
   ctx.drive = &drive;
   std::unique_ptr<Plotter> plotter;
   if (auto dir = flags.get("--plot")) {
@@ -187,15 +181,7 @@ int demo_command(Args args, std::ostream& out, std::ostream& err) {
   }
   const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   doc["elapsed_s"] = elapsed;
-  if (auto path = flags.get("--json")) {
-    std::ofstream os(*path);
-    doc.dump(os);
-    os << '\n';
-    if (!os) {
-      err << "ctxfuse demo: cannot write " << *path << '\n';
-      return 1;
-    }
-  }
+  if (auto path = flags.get("--json"); path && !write_json_file(doc, *path, "demo", err)) return 1;
   return 0;
 }
 

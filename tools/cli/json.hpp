@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <map>
 #include <memory>
 #include <ostream>
@@ -166,5 +167,18 @@ class Json {
 
   std::variant<Object, Array, double, bool, std::string> value_;
 };
+
+/// Writes `doc` and a newline to `path`; false, with "ctxfuse <command>: cannot write <path>"
+/// on `err`, when the file cannot be written.
+inline bool write_json_file(const Json& doc, const std::string& path, std::string_view command, std::ostream& err) {
+  std::ofstream os(path);
+  doc.dump(os);
+  os << '\n';
+  if (!os.flush()) {
+    err << "ctxfuse " << command << ": cannot write " << path << '\n';
+    return false;
+  }
+  return true;
+}
 
 }  // namespace ctxfuse::cli

@@ -18,12 +18,11 @@
 #include <charconv>
 #include <cstdint>
 #include <cstdio>
-#include <fstream>
 #include <limits>
+#include <optional>
 #include <ostream>
 #include <set>
 #include <span>
-#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -31,9 +30,9 @@
 #include "cli/cli_args.hpp"
 #include "cli/json.hpp"
 #include "cli/registry.hpp"
+#include "cli/scenario_flag.hpp"
 #include "ctxfuse/pipelines/region_imm.hpp"
 #include "ctxfuse/sim/drive.hpp"
-#include "ctxfuse/sim/scenarios.hpp"
 
 namespace ctxfuse::cli {
 namespace {
@@ -453,24 +452,13 @@ int region_study(Args args, std::ostream& out, std::ostream& err) {
     return 2;
   }
   const std::string scenario = flags.get("--scenario").value_or("default");
-  sim::DriveConfig base;
-  try {
-    base = sim::scenario_config(scenario);
-  } catch (const std::invalid_argument& e) {
-    err << "ctxfuse region-study: --scenario: " << e.what() << '\n';
-    return 2;
-  }
+  const std::optional<sim::DriveConfig> base = scenario_from_flags(flags, "region-study", err);
+  if (!base) return 2;
   std::vector<std::uint64_t> seeds;
   if (!parse_seeds(flags.get("--seeds").value_or("1-5"), seeds, err)) return 2;
   const auto json_path = flags.get("--json");
-  std::ofstream json_file;
-  if (json_path) {  // opened before the study runs, so that a bad path fails at once
-    json_file.open(*json_path);
-    if (!json_file) {
-      err << "ctxfuse region-study: cannot write " << *json_path << '\n';
-      return 1;
-    }
-  }
+  // Tried before the study runs, so that a bad path fails at once.
+  if (json_path && !write_json_file(Json{}, *json_path, "region-study", err)) return 1;
 
   ri::Settings settings;
   if (ungated) settings.gate_probability = 1.0;
@@ -483,7 +471,7 @@ int region_study(Args args, std::ostream& out, std::ostream& err) {
   Json per_seed = Json::array();
   std::vector<SeedResult> results;
   for (const std::uint64_t seed : seeds) {
-    sim::DriveConfig cfg = base;
+    sim::DriveConfig cfg = *base;
     cfg.seed = seed;
     Json j;
     results.push_back(study_seed(cfg, settings, out, j));
@@ -492,14 +480,7 @@ int region_study(Args args, std::ostream& out, std::ostream& err) {
   }
   doc["per_seed"] = std::move(per_seed);
   report_summary(results, header, out, doc["summary"]);
-  if (json_path) {
-    doc.dump(json_file);
-    json_file << '\n';
-    if (!json_file.flush()) {
-      err << "ctxfuse region-study: cannot write " << *json_path << '\n';
-      return 1;
-    }
-  }
+  if (json_path && !write_json_file(doc, *json_path, "region-study", err)) return 1;
   return 0;
 }
 

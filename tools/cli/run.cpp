@@ -84,15 +84,7 @@ int run_command(Args args, std::ostream& out, std::ostream& err) {
       return 1;
     }
   }
-  if (auto path = flags.get("--json")) {
-    std::ofstream os(*path);
-    doc.dump(os);
-    os << '\n';
-    if (!os) {
-      err << "ctxfuse run: cannot write " << *path << '\n';
-      return 1;
-    }
-  }
+  if (auto path = flags.get("--json"); path && !write_json_file(doc, *path, "run", err)) return 1;
   return 0;
 }
 

@@ -352,9 +352,13 @@ struct FilterHealth {
   bool lockout(double t) {
     gnss_locked_out = gnss.lockout(t);
     if (!gnss_locked_out && !uwb.lockout(t)) return false;
+    recovered();
+    return true;
+  }
+  /// Restarts both sources' counts (after a recovery, this filter's own or a wider one).
+  void recovered() {
     gnss.recovered();
     uwb.recovered();
-    return true;
   }
   /// The position standard deviation a recovery at GNSS epoch `e` needs to reach the fix from
   /// `p`: a filter that ran away from the fixes has to be able to take them again. Leaving a
@@ -726,10 +730,7 @@ struct ImmSink {
                             auto& h = health[static_cast<std::size_t>(j.value)];
                             const bool own = h.lockout(e.t);
                             if (!own && !imm_lockout) return;
-                            if (imm_lockout) {  // the mode's own counts restart with the IMM's
-                              h.gnss.recovered();
-                              h.uwb.recovered();
-                            }
+                            if (imm_lockout) h.recovered();  // the mode's counts restart with the IMM's
                             auto& b = f->template mode_belief<j.value>();
                             const Eigen::Vector2d p = L::get<"p">(b.mean);
                             widen(b.cov, s, std::max(own ? h.reach(e, p) : 0.0, imm_lockout ? imm_health.reach(e, p) : 0.0));
