@@ -319,6 +319,9 @@ TEST(RegionStudyUsage, BadFlagsExitTwoNamingTheProblem) {
                         Case{"--seeds 99999999999", "'99999999999' is not a seed"},
                         Case{"--seeds", "'--seeds' needs a value"},
                         Case{"--gate 0.9", "unknown option '--gate'"},
+                        Case{"--indoor-fix-error x", "--indoor-fix-error expects a number, got 'x'"},
+                        Case{"--indoor-fix-error -1", "gnss.indoor_fix_error_m must be finite and >= 0"},
+                        Case{"--indoor-fix-reported-ratio 0", "gnss.indoor_fix_reported_ratio must be within (0, 100]"},
                         Case{"extra", "unexpected argument 'extra'"}}) {
     const auto r = run(std::string("region-study ") + c.args);
     EXPECT_EQ(r.code, 2) << c.args << ": " << r.err;
@@ -328,6 +331,7 @@ TEST(RegionStudyUsage, BadFlagsExitTwoNamingTheProblem) {
   const auto help = run("region-study --help");
   EXPECT_EQ(help.code, 0);
   EXPECT_NE(help.out.find("--ungated"), std::string::npos);
+  EXPECT_NE(help.out.find("--indoor-fix-error"), std::string::npos);
 }
 
 }  // namespace

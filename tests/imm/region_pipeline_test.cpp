@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <limits>
 #include <map>
 #include <span>
@@ -96,6 +98,53 @@ TEST(RegionPipeline, UwbAloneTracksTheGarage) {
   for (std::size_t i = 0; i < tr.t.size(); ++i)
     if (tr.region[i] == 2) worst = std::max(worst, (tr.estimate[i] - tr.truth[i]).norm());
   EXPECT_LT(worst, 10.0);
+  // No anchor reaches the street, so UWB alone has no solution there; indoors it has one at
+  // almost every epoch.
+  EXPECT_EQ(e.with_solution[0], 0u);
+  EXPECT_GT(e.availability(2), 0.9);
+  EXPECT_LT(e.mean_with_solution[2], 0.5);
+}
+
+TEST(RegionPipeline, ErrorsScoreSolutionsApartFromHeldPositions) {
+  // Four epochs, errors 1, 3 (outdoor) and 2, 4 (indoor) along x; only the first has a solution.
+  ri::Track tr;
+  const std::array<double, 4> err{1.0, 3.0, 2.0, 4.0};
+  const std::array<int, 4> region{0, 0, 2, 2};
+  for (std::size_t i = 0; i < 4; ++i) {
+    tr.t.push_back(static_cast<double>(i));
+    tr.truth.emplace_back(10.0, -5.0);
+    tr.estimate.emplace_back(10.0 + err[i], -5.0);
+    tr.region.push_back(region[i]);
+    tr.dominant_mode.push_back(-1);
+    tr.solution.push_back(i == 0);
+  }
+  const auto e = ri::errors(tr);
+  EXPECT_DOUBLE_EQ(e.mean[0], 2.0);
+  EXPECT_DOUBLE_EQ(e.mean[2], 3.0);
+  EXPECT_DOUBLE_EQ(e.mean[3], 2.5);
+  EXPECT_DOUBLE_EQ(e.mean_with_solution[0], 1.0);
+  EXPECT_DOUBLE_EQ(e.mean_with_solution[3], 1.0);
+  EXPECT_TRUE(std::isnan(e.mean_with_solution[2]));
+  EXPECT_TRUE(std::isnan(e.mean_with_solution[1]));  // no transition epoch at all
+  EXPECT_DOUBLE_EQ(e.availability(0), 0.5);
+  EXPECT_DOUBLE_EQ(e.availability(2), 0.0);
+  EXPECT_DOUBLE_EQ(e.availability(3), 0.25);
+  EXPECT_DOUBLE_EQ(e.availability(1), 0.0);
+}
+
+TEST(RegionPipeline, GnssAloneHasASolutionExactlyAtTheFixes) {
+  const auto tr = ri::run(drive(), ri::Estimator::gnss, ri::Settings{});
+  std::size_t fixes_after_start = 0, first = 0;
+  while (!drive().gnss[first].has_fix) ++first;
+  for (std::size_t g = first; g < drive().gnss.size(); ++g) fixes_after_start += drive().gnss[g].has_fix;
+  ASSERT_EQ(tr.solution.size(), tr.t.size());
+  const auto e = ri::errors(tr);
+  EXPECT_EQ(e.with_solution[3], fixes_after_start);
+  for (std::size_t i = 0; i < tr.t.size(); ++i) {
+    const auto g = static_cast<std::size_t>(std::lround(tr.t[i] * drive().config.gnss.rate_hz));
+    ASSERT_LT(g, drive().gnss.size());
+    EXPECT_EQ(tr.solution[i], drive().gnss[g].has_fix) << "epoch at t = " << tr.t[i];
+  }
 }
 
 TEST(RegionPipeline, MultilaterationAgainstHandGeometry) {

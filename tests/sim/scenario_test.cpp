@@ -143,3 +143,57 @@ TEST(SimScenario, UwbNeverReachesTheStreetInEitherScenario) {
     EXPECT_EQ(street, 0) << name;
   }
 }
+
+TEST(SimScenario, IndoorFixesChangeNothingButTheIndoorEpochs) {
+  // The option draws no random numbers: everything outside the garage, and every other
+  // sensor, is bit-identical to the drive without it; indoors every epoch gets a fix whose
+  // error is the option's std times one unit process, so it scales exactly with the std.
+  sim::DriveConfig c;
+  c.seed = 4;
+  const sim::Drive plain = sim::simulate_drive(c);
+  c.gnss.indoor_fix_error_m = 2.0;
+  c.gnss.indoor_fix_reported_ratio = 0.25;
+  const sim::Drive two = sim::simulate_drive(c);
+  c.gnss.indoor_fix_error_m = 6.0;
+  const sim::Drive six = sim::simulate_drive(c);
+
+  ASSERT_EQ(plain.gnss.size(), two.gnss.size());
+  ASSERT_EQ(plain.uwb.size(), two.uwb.size());
+  ASSERT_EQ(plain.imu.size(), two.imu.size());
+  for (std::size_t i = 0; i < plain.uwb.size(); ++i) EXPECT_EQ(plain.uwb[i].range_m, two.uwb[i].range_m);
+  for (std::size_t i = 0; i < plain.imu.size(); i += 97) EXPECT_EQ(plain.imu[i].accel, two.imu[i].accel);
+  std::size_t indoor = 0;
+  for (std::size_t i = 0; i < plain.gnss.size(); ++i) {
+    const auto &a = plain.gnss[i], &b = two.gnss[i], &e6 = six.gnss[i];
+    EXPECT_EQ(a.num_sats, b.num_sats);
+    EXPECT_EQ(a.mean_cn0_dbhz, b.mean_cn0_dbhz);  // recognition features untouched
+    if (a.region != sim::Region::indoor) {
+      EXPECT_EQ(a.has_fix, b.has_fix);
+      EXPECT_EQ(a.position, b.position);
+      EXPECT_EQ(a.std_horizontal_m, b.std_horizontal_m);
+      continue;
+    }
+    ++indoor;
+    EXPECT_FALSE(a.has_fix);
+    ASSERT_TRUE(b.has_fix) << "t = " << b.t;
+    ASSERT_TRUE(e6.has_fix);
+    EXPECT_DOUBLE_EQ(b.std_horizontal_m, 0.5);  // 0.25 x 2 m
+    EXPECT_DOUBLE_EQ(e6.std_horizontal_m, 1.5);
+    const auto k = static_cast<std::size_t>(std::lround(b.t * two.config.imu.rate_hz));
+    const Eigen::Vector3d truth = two.truth[std::min(k, two.truth.size() - 1)].position;
+    EXPECT_NEAR((b.position - truth - b.error).norm(), 0.0, 1e-9);
+    for (int ax = 0; ax < 3; ++ax) EXPECT_NEAR(e6.error[ax], 3.0 * b.error[ax], 1e-12);
+  }
+  EXPECT_GT(indoor, 100u);
+}
+
+TEST(SimScenario, IndoorFixOptionsAreChecked) {
+  sim::DriveConfig c;
+  c.gnss.indoor_fix_error_m = -1.0;
+  EXPECT_THROW((void)sim::simulate_drive(c), std::invalid_argument);
+  c.gnss.indoor_fix_error_m = 1.0;
+  c.gnss.indoor_fix_reported_ratio = 0.0;
+  EXPECT_THROW((void)sim::simulate_drive(c), std::invalid_argument);
+  c.gnss.indoor_fix_reported_ratio = std::nan("");
+  EXPECT_THROW((void)sim::simulate_drive(c), std::invalid_argument);
+}

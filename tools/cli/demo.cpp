@@ -110,13 +110,15 @@ void gnss_baseline(const sim::Drive& d, Json& j, std::ostream& out, Plotter* plo
 
 int demo_command(Args args, std::ostream& out, std::ostream& err) {
   if (wants_help(args)) {
-    out << "usage: ctxfuse demo [--seed N] [--scenario default|paper] [--json FILE] [--plot DIR]\n"
+    out << "usage: ctxfuse demo [--seed N] [--scenario default|paper] [--indoor-fix-error M]\n"
+           "                    [--indoor-fix-reported-ratio R] [--json FILE] [--plot DIR]\n"
            "Simulates the default drive and runs every built demo section against the papers' tables.\n"
            "--scenario paper: the sensor picture the region paper describes (every UWB anchor inside\n"
-           "the garage, its outer walls opaque to UWB; include/ctxfuse/sim/scenarios.hpp).\n";
+           "the garage, its outer walls opaque to UWB; include/ctxfuse/sim/scenarios.hpp).\n"
+        << kScenarioFlagsHelp;
     return 0;
   }
-  FlagParser flags("demo", {"--seed", "--scenario", "--json", "--plot"});
+  FlagParser flags("demo", with_scenario_flags({"--seed", "--json", "--plot"}));
   if (!flags.parse(args, err)) return 2;
   if (!flags.positionals().empty()) {
     err << "ctxfuse demo: unexpected argument '" << flags.positionals()[0] << "'\n";
@@ -125,7 +127,7 @@ int demo_command(Args args, std::ostream& out, std::ostream& err) {
   DemoContext ctx;
   if (!flags.get_u64("--seed", ctx.seed, err)) return 2;
   const auto t0 = std::chrono::steady_clock::now();
-  const std::string scenario = flags.get("--scenario").value_or("default");
+  const std::string scenario = scenario_label(flags);
   std::optional<sim::DriveConfig> cfg = scenario_from_flags(flags, "demo", err);
   if (!cfg) return 2;
   cfg->seed = ctx.seed;

@@ -423,17 +423,18 @@ void report_summary(const std::vector<SeedResult>& results, std::string_view hea
 // ------------------------------------------------------------------ command
 int region_study(Args args, std::ostream& out, std::ostream& err) {
   if (wants_help(args)) {
-    out << "usage: ctxfuse region-study [--scenario default|paper] [--seeds LIST] [--ungated] [--json FILE]\n"
+    out << "usage: ctxfuse region-study [--scenario default|paper] [--indoor-fix-error M]\n"
+           "                            [--indoor-fix-reported-ratio R] [--seeds LIST] [--ungated] [--json FILE]\n"
            "Per simulated drive (seed): the sensor picture per zone of the drive (out-far, out-near = within\n"
            "30 m of the approach mouth, tr-mouth / tr-door = street / door half of the approach, in-door10 =\n"
            "indoor within 10 m of the door, in-deep), the GNSS/UWB updates each estimator's chi-square gate\n"
            "rejected per zone (FKF; plain IMM and region IMM per mode and as a whole), the mean errors, and\n"
            "a summary of region IMM < IMM < FKF over the seeds. The recogniser is trained as in\n"
            "`ctxfuse demo` (seeds N+101..N+103, validation N+202).\n"
-           "  --scenario NAME  sim::scenario_config: default (the library's drive) or paper (default: default)\n"
            "  --seeds LIST     e.g. 1-5, 1,3,7 or 1-3,9 (default: 1-5)\n"
            "  --ungated        no chi-square gate (gate probability 1; the lock-out recovery never fires)\n"
-           "  --json FILE      every printed number also as JSON\n";
+           "  --json FILE      every printed number also as JSON\n"
+        << kScenarioFlagsHelp;
     return 0;
   }
   // FlagParser takes flags with values only; --ungated is a switch.
@@ -445,13 +446,13 @@ int region_study(Args args, std::ostream& out, std::ostream& err) {
     else
       rest.push_back(a);
   }
-  FlagParser flags("region-study", {"--scenario", "--seeds", "--json"});
+  FlagParser flags("region-study", with_scenario_flags({"--seeds", "--json"}));
   if (!flags.parse(Args(rest), err)) return 2;
   if (!flags.positionals().empty()) {
     err << "ctxfuse region-study: unexpected argument '" << flags.positionals()[0] << "'\n";
     return 2;
   }
-  const std::string scenario = flags.get("--scenario").value_or("default");
+  const std::string scenario = scenario_label(flags);
   const std::optional<sim::DriveConfig> base = scenario_from_flags(flags, "region-study", err);
   if (!base) return 2;
   std::vector<std::uint64_t> seeds;

@@ -28,6 +28,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numbers>
 #include <optional>
 #include <span>
@@ -275,6 +276,10 @@ struct Track {
   std::vector<Eigen::Vector2d> truth;
   std::vector<int> region;
   std::vector<int> dominant_mode;  // IMMs only
+  // Whether the estimator had a solution of its own at the epoch. Filters always do; GNSS
+  // alone only with a fix and UWB alone only while its tracker is locked, and at the other
+  // epochs they are scored at the position they held (see errors()).
+  std::vector<bool> solution;
 };
 
 struct GnssTag {};
@@ -415,12 +420,14 @@ inline Eigen::Vector2d truth_at(const sim::Drive& d, double t) {
   return d.truth[std::min(k, d.truth.size() - 1)].position.head<2>();
 }
 
-inline void record(Track& tr, const sim::Drive& d, const sim::GnssEpoch& e, const Eigen::Vector2d& p, int mode = -1) {
+inline void record(Track& tr, const sim::Drive& d, const sim::GnssEpoch& e, const Eigen::Vector2d& p, int mode = -1,
+                   bool solution = true) {
   tr.t.push_back(e.t);
   tr.estimate.push_back(p);
   tr.truth.push_back(truth_at(d, e.t));
   tr.region.push_back(static_cast<int>(e.region));
   tr.dominant_mode.push_back(mode);
+  tr.solution.push_back(solution);
 }
 
 // ---- sinks ----
@@ -435,7 +442,7 @@ struct GnssOnly {
   void uwb(const sim::UwbRange&) {}
   void gnss(const sim::GnssEpoch& e) { last = e.position.head<2>(); }
   // Without a fix the receiver's last position is all the user has.
-  void epoch_done(const sim::GnssEpoch& e) { record(track, d, e, last); }
+  void epoch_done(const sim::GnssEpoch& e) { record(track, d, e, last, -1, e.has_fix); }
 };
 
 /// Snapshot multilateration: the horizontal position whose ranges (tag at `tag_height`) best
@@ -558,7 +565,7 @@ struct UwbOnly {
   void epoch_done(const sim::GnssEpoch& e) {
     if (now - last_range_t > s.uwb_hold_after_s) locked = false;
     if (locked) held = L::get<"p">(f->belief().mean);
-    record(track, d, e, held);
+    record(track, d, e, held, -1, locked);
   }
 };
 
@@ -808,24 +815,40 @@ inline Track run(const sim::Drive& d, Estimator e, const Settings& s, const std:
   return {};
 }
 
-/// Mean horizontal error per true region and overall; X/Y RMSE per region and overall.
+/// Mean horizontal error per true region and overall; X/Y RMSE per region and overall. `mean`
+/// scores every epoch, an estimator without a solution at the position it holds (what its
+/// user is left with); `mean_with_solution` scores only the epochs where it has one, and
+/// `with_solution` counts them, so that a single sensor's accuracy and its availability are
+/// reported apart. Before UWB alone's first acquisition the position it holds is the start
+/// fix that every estimator is given, which says nothing about UWB.
 struct TrackErrors {
   std::array<double, 4> mean{};    // outdoor, transition, indoor, overall
   std::array<double, 4> rmse_x{};
   std::array<double, 4> rmse_y{};
   std::array<std::size_t, 4> count{};
+  std::array<double, 4> mean_with_solution{};  // NaN where there is no such epoch
+  std::array<std::size_t, 4> with_solution{};
+  double availability(std::size_t k) const {
+    return count[k] ? static_cast<double>(with_solution[k]) / static_cast<double>(count[k]) : 0.0;
+  }
 };
 
 inline TrackErrors errors(const Track& tr) {
   TrackErrors out;
-  std::array<double, 4> sum{}, sx{}, sy{};
+  std::array<double, 4> sum{}, sx{}, sy{}, sum_solution{};
   for (std::size_t i = 0; i < tr.t.size(); ++i) {
     const Eigen::Vector2d e = tr.estimate[i] - tr.truth[i];
+    const bool solution = i < tr.solution.size() ? tr.solution[i] : true;
     for (int k : {tr.region[i], 3}) {
-      sum[static_cast<std::size_t>(k)] += e.norm();
-      sx[static_cast<std::size_t>(k)] += e.x() * e.x();
-      sy[static_cast<std::size_t>(k)] += e.y() * e.y();
-      ++out.count[static_cast<std::size_t>(k)];
+      const auto kk = static_cast<std::size_t>(k);
+      sum[kk] += e.norm();
+      sx[kk] += e.x() * e.x();
+      sy[kk] += e.y() * e.y();
+      ++out.count[kk];
+      if (solution) {
+        sum_solution[kk] += e.norm();
+        ++out.with_solution[kk];
+      }
     }
   }
   for (std::size_t k = 0; k < 4; ++k) {
@@ -833,6 +856,8 @@ inline TrackErrors errors(const Track& tr) {
     out.mean[k] = sum[k] / n;
     out.rmse_x[k] = std::sqrt(sx[k] / n);
     out.rmse_y[k] = std::sqrt(sy[k] / n);
+    out.mean_with_solution[k] = out.with_solution[k] ? sum_solution[k] / static_cast<double>(out.with_solution[k])
+                                                     : std::numeric_limits<double>::quiet_NaN();
   }
   return out;
 }

@@ -101,6 +101,15 @@ struct GnssConfig {
   /// roof (scattering by parked cars, pillars): a few weak satellites for some metres inside.
   double doorway_loss_db = 3.0;
   double indoor_loss_db_per_m = 0.5;
+  /// Indoor fixes, off by default (0). Some receivers keep reporting a position under a roof
+  /// (coasting on their own motion model, or fixing on a few reflected signals); that is the
+  /// case where a region-aware filter has a wrong-side sensor to leave out. When > 0, every
+  /// indoor epoch has a fix whose horizontal error per axis is a Gauss-Markov process of this
+  /// std (m; correlation time multipath_tau_s, the same unit process as the multipath, so the
+  /// error is continuous across the door), vertical likewise, and the receiver reports
+  /// indoor_fix_reported_ratio times that std as its 1-sigma (below 1: over-confident).
+  double indoor_fix_error_m = 0.0;
+  double indoor_fix_reported_ratio = 1.0;
 };
 
 struct UwbConfig {

@@ -65,7 +65,7 @@ struct SatObservation {
 /// One GNSS epoch (every epoch is listed, with or without a position fix).
 struct GnssEpoch {
   double t = 0.0;
-  bool has_fix = false;            // false indoors and with fewer than 4 satellites
+  bool has_fix = false;            // false with fewer than 4 satellites, and indoors (GnssConfig::indoor_fix_error_m)
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // fix, ENU m (zero without fix)
   double std_horizontal_m = 0.0;   // receiver-reported 1-sigma per horizontal axis
   double std_vertical_m = 0.0;
@@ -208,6 +208,9 @@ inline void check_config(const DriveConfig& c) {
   nonneg(c.gnss.roadside_obstruction_attenuation_db, "gnss.roadside_obstruction_attenuation_db");
   nonneg(c.gnss.doorway_loss_db, "gnss.doorway_loss_db");
   nonneg(c.gnss.indoor_loss_db_per_m, "gnss.indoor_loss_db_per_m");
+  nonneg(c.gnss.indoor_fix_error_m, "gnss.indoor_fix_error_m");
+  if (!(c.gnss.indoor_fix_reported_ratio > 0.0 && c.gnss.indoor_fix_reported_ratio <= 100.0))
+    bad("gnss.indoor_fix_reported_ratio must be within (0, 100]");
   if (!(c.gnss.antenna_height_m >= 0.0 && c.gnss.antenna_height_m <= 10.0)) bad("gnss.antenna_height_m must be within [0, 10] m");
   nonneg(c.uwb.range_noise_m, "uwb.range_noise_m");
   nonneg(c.uwb.nlos_extra_noise_m, "uwb.nlos_extra_noise_m");
@@ -432,6 +435,13 @@ inline void simulate_gnss(Drive& d) {
       e.position = st.position + e.error;
       e.std_horizontal_m = std::sqrt(sh * sh + mp * mp);
       e.std_vertical_m = std::sqrt(sv * sv + mp * mp);
+    } else if (e.region == Region::indoor && c.indoor_fix_error_m > 0.0) {
+      // No new random draws: the default drive's sequence stays what it was.
+      e.multipath_bias = c.indoor_fix_error_m * mp_unit;
+      e.error = e.multipath_bias;
+      e.has_fix = true;
+      e.position = st.position + e.error;
+      e.std_horizontal_m = e.std_vertical_m = c.indoor_fix_reported_ratio * c.indoor_fix_error_m;
     }
     d.gnss.push_back(e);
   });
