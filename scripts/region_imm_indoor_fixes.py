@@ -15,11 +15,12 @@ Filters take a fix with R = max(reported sigma, 0.5 m)^2 (region_imm::Settings),
 below 0.5 / M all act as 0.5 m.
 Defaults: build/release/tools/ctxfuse, scenarios default and paper, seeds 1-10, errors 2, 5,
 10 m, ratios 1, 0.5, 0.1, out build/region-imm-indoor-fixes."""
-import argparse
 import json
 import os
 import subprocess
 import sys
+
+from region_imm_seeds import study_parser
 
 METHODS = ("fkf", "imm", "region_imm")
 
@@ -59,14 +60,10 @@ def row(scenario, error, ratio, doc):
 
 
 def main():
-    repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--cli", default=os.path.join(repo, "build", "release", "tools", "ctxfuse"))
+    ap = study_parser(__doc__, "1-10", "region-imm-indoor-fixes")
     ap.add_argument("--scenarios", default="default,paper")
-    ap.add_argument("--seeds", default="1-10")
     ap.add_argument("--errors", default="2,5,10")
     ap.add_argument("--ratios", default="1,0.5,0.1")
-    ap.add_argument("--out", default=os.path.join(repo, "build", "region-imm-indoor-fixes"))
     ap.add_argument("--reuse", action="store_true")
     a = ap.parse_args()
     try:

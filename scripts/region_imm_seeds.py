@@ -27,13 +27,20 @@ def seed_list(text):
     return seeds
 
 
-def main():
+def study_parser(doc, seeds, out_name):
+    """The arguments the region_imm scripts share: --cli (the built tool), --seeds, and --out
+    (a folder under build/ for the JSON documents)."""
     repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--cli", default=os.path.join(repo, "build", "release", "tools", "ctxfuse"))
+    ap.add_argument("--seeds", default=seeds)
+    ap.add_argument("--out", default=os.path.join(repo, "build", out_name))
+    return ap
+
+
+def main():
+    ap = study_parser(__doc__, "1-5", "region-imm-seeds")
     ap.add_argument("--scenario", default="default")
-    ap.add_argument("--seeds", default="1-5")
-    ap.add_argument("--out", default=os.path.join(repo, "build", "region-imm-seeds"))
     a = ap.parse_args()
     try:
         seeds = seed_list(a.seeds)
