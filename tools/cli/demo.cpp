@@ -110,11 +110,8 @@ void gnss_baseline(const sim::Drive& d, Json& j, std::ostream& out, Plotter* plo
 
 int demo_command(Args args, std::ostream& out, std::ostream& err) {
   if (wants_help(args)) {
-    out << "usage: ctxfuse demo [--seed N] [--scenario default|paper] [--indoor-fix-error M]\n"
-           "                    [--indoor-fix-reported-ratio R] [--json FILE] [--plot DIR]\n"
-           "Simulates the default drive and runs every built demo section against the papers' tables.\n"
-           "--scenario paper: the sensor picture the region paper describes (every UWB anchor inside\n"
-           "the garage, its outer walls opaque to UWB; include/ctxfuse/sim/scenarios.hpp).\n"
+    out << "usage: ctxfuse demo [--seed N] " << kScenarioFlagsUsage << " [--json FILE] [--plot DIR]\n"
+        << "Simulates the drive and runs every built demo section against the papers' tables.\n"
         << kScenarioFlagsHelp;
     return 0;
   }

@@ -423,9 +423,8 @@ void report_summary(const std::vector<SeedResult>& results, std::string_view hea
 // ------------------------------------------------------------------ command
 int region_study(Args args, std::ostream& out, std::ostream& err) {
   if (wants_help(args)) {
-    out << "usage: ctxfuse region-study [--scenario default|paper] [--indoor-fix-error M]\n"
-           "                            [--indoor-fix-reported-ratio R] [--seeds LIST] [--ungated] [--json FILE]\n"
-           "Per simulated drive (seed): the sensor picture per zone of the drive (out-far, out-near = within\n"
+    out << "usage: ctxfuse region-study " << kScenarioFlagsUsage << " [--seeds LIST] [--ungated] [--json FILE]\n"
+        << "Per simulated drive (seed): the sensor picture per zone of the drive (out-far, out-near = within\n"
            "30 m of the approach mouth, tr-mouth / tr-door = street / door half of the approach, in-door10 =\n"
            "indoor within 10 m of the door, in-deep), the GNSS/UWB updates each estimator's chi-square gate\n"
            "rejected per zone (FKF; plain IMM and region IMM per mode and as a whole), the mean errors, and\n"

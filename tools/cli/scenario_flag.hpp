@@ -23,10 +23,13 @@ inline std::set<std::string, std::less<>> with_scenario_flags(std::initializer_l
   return flags;
 }
 
-/// Help text for those flags.
+/// Those flags in a usage line, and their help text.
+inline constexpr const char* kScenarioFlagsUsage =
+    "[--scenario default|paper] [--indoor-fix-error M] [--indoor-fix-reported-ratio R]";
 inline constexpr const char* kScenarioFlagsHelp =
     "  --scenario NAME                 sim::scenario_config: default (the library's drive) or paper (the\n"
-    "                                  region paper's sensor picture); default: default\n"
+    "                                  sensor picture the region paper describes: every UWB anchor inside\n"
+    "                                  the garage, its outer walls opaque to UWB; sim/scenarios.hpp)\n"
     "  --indoor-fix-error M            the GNSS receiver keeps reporting fixes indoors, with a Gauss-Markov\n"
     "                                  error of M metres std per axis (GnssConfig::indoor_fix_error_m; 0: none)\n"
     "  --indoor-fix-reported-ratio R   those fixes' reported sigma is R * M (default 1; below 1: over-confident)\n";
