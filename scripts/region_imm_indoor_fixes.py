@@ -9,7 +9,8 @@ R`: it reports R * M as its sigma) and runs `ctxfuse region-study` for every sce
 and ratio, plus the drive without indoor fixes. It prints, as markdown, the mean over the seeds
 of the overall and indoor mean error of FKF, IMM and region IMM, and on how many seeds the
 paper's ordering (region IMM < IMM < FKF) holds overall and in the transition region, and on
-how many region IMM has the lowest overall error of the three. --reuse reads a grid point's
+how many region IMM has the lowest overall error of the three, and how often the UWB integrity
+check re-anchored each of the three (summed over the seeds). --reuse reads a grid point's
 JSON from DIR when it is there instead of running the study again.
 Filters take a fix with R = max(reported sigma, 0.5 m)^2 (region_imm::Settings), so ratios
 below 0.5 / M all act as 0.5 m.
@@ -56,6 +57,7 @@ def row(scenario, error, ratio, doc):
     best = sum(1 for s in per_seed
                if s["mean_error_m"]["region_imm"]["overall"] < min(s["mean_error_m"][m]["overall"] for m in ("fkf", "imm")))
     cells += [f"{summary['overall_holds_count']}/{n}", f"{summary['transition_holds_count']}/{n}", f"{best}/{n}"]
+    cells += [" / ".join(str(sum(s["integrity_faults"][m] for s in per_seed)) for m in METHODS)]
     return "| " + " | ".join(cells) + " |"
 
 
@@ -79,8 +81,9 @@ def main():
     print(f"Seeds {a.seeds}; mean over the seeds of the mean horizontal error (m), FKF / IMM / region IMM; "
           "ordering = region IMM < IMM < FKF")
     print()
-    print("| scenario | indoor fixes | overall | indoor | ordering overall | ordering transition | region IMM best overall |")
-    print("|---|---|---|---|---|---|---|")
+    print("| scenario | indoor fixes | overall | indoor | ordering overall | ordering transition | region IMM best overall "
+          "| UWB integrity re-anchorings |")
+    print("|---|---|---|---|---|---|---|---|")
     for scenario in a.scenarios.split(","):
         grid = [(None, None)] + [(e, r) for e in errors for r in ratios]
         for error, ratio in grid:

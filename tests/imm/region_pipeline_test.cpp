@@ -9,7 +9,10 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <numbers>
 #include <span>
+#include <string>
+#include <utility>
 
 #include "ctxfuse/pipelines/region_imm.hpp"
 #include "ctxfuse/sim/scenarios.hpp"
@@ -208,13 +211,14 @@ TEST(RegionPipeline, ErrorsAreMeansOverTheRegionsSamples) {
 
 namespace {
 
-const sim::Drive& drive_with_seed(std::uint64_t seed) {
-  static std::map<std::uint64_t, sim::Drive> cache;
-  auto it = cache.find(seed);
+/// The drive of `seed` in scenario `scenario` (sim::scenario_config), simulated once.
+const sim::Drive& drive_with_seed(std::uint64_t seed, const std::string& scenario = "default") {
+  static std::map<std::pair<std::string, std::uint64_t>, sim::Drive> cache;
+  auto it = cache.find({scenario, seed});
   if (it == cache.end()) {
-    sim::DriveConfig c;
+    sim::DriveConfig c = sim::scenario_config(scenario);
     c.seed = seed;
-    it = cache.emplace(seed, sim::simulate_drive(c)).first;
+    it = cache.emplace(std::pair{scenario, seed}, sim::simulate_drive(c)).first;
   }
   return it->second;
 }
@@ -245,6 +249,9 @@ TEST(RegionPipeline, SeedFourStaysOnTheTrack) {
 TEST(RegionPipeline, LockoutRecoveryIsWhatKeepsTheTightGateSafe) {
   const sim::Drive& d = drive_with_seed(2);
   ri::Settings with, without;
+  // The UWB integrity check would re-anchor it too (IntegrityCheck* below); off here, so that
+  // this is the lock-out recovery alone.
+  with.uwb_integrity = without.uwb_integrity = false;
   without.health.timeout_s = std::numeric_limits<double>::infinity();
   const auto a = ri::errors(ri::run(d, ri::Estimator::iotr, with));
   const auto b = ri::errors(ri::run(d, ri::Estimator::iotr, without));
@@ -259,11 +266,7 @@ TEST(RegionPipeline, LockoutRecoveryIsWhatKeepsTheTightGateSafe) {
 // 16.2 m in the transition region). The IMM-level lock-out, widening every mode as far as the
 // fix, keeps it at 0.79 / 2.97 m.
 TEST(RegionPipeline, ImmLevelLockoutBringsEveryModeBackToTheFixes) {
-  static const sim::Drive d = [] {
-    sim::DriveConfig c = sim::paper_scenario();
-    c.seed = 1;
-    return sim::simulate_drive(c);
-  }();
+  const sim::Drive& d = drive_with_seed(1, "paper");
   const ri::Settings s;
   const auto tr = ri::run(d, ri::Estimator::imm, s);
   const auto err = ri::errors(tr);
@@ -276,6 +279,98 @@ TEST(RegionPipeline, ImmLevelLockoutBringsEveryModeBackToTheFixes) {
   ri::Settings without = s;
   without.health.timeout_s = std::numeric_limits<double>::infinity();
   EXPECT_GT(ri::errors(ri::run(d, ri::Estimator::imm, without)).mean[3], 3.0);
+}
+
+
+// The UWB integrity check (Settings::uwb_integrity, policies/integrity.hpp). Scenario "paper",
+// seed 3: the federated filter enters the garage 6.9 m behind the truth, on the wrong side of
+// the line through the two door-side anchors (x = 3 m); their ranges then fit the mirror track,
+// which it follows backwards with a small covariance, and no lock-out is ever declared (36.6 m
+// mean error). Snapshots of four or more anchors deeper in the garage show it; the check must
+// re-anchor it, and be what brings it back.
+TEST(RegionPipeline, IntegrityCheckTakesTheFederatedFilterOffTheMirrorTrack) {
+  const sim::Drive& d = drive_with_seed(3, "paper");
+  const ri::Settings with;
+  ri::Settings without;
+  without.uwb_integrity = false;
+  const auto a = ri::run(d, ri::Estimator::fkf, with);
+  const auto b = ri::run(d, ri::Estimator::fkf, without);
+  EXPECT_GE(a.integrity_faults, 1);
+  EXPECT_EQ(b.integrity_faults, 0);
+  EXPECT_LT(ri::errors(a).mean[3], 2.0);
+  EXPECT_GT(ri::errors(b).mean[3], 10.0);
+  double worst_indoor = 0.0;
+  for (std::size_t i = 0; i < a.t.size(); ++i)
+    if (a.region[i] == 2 && a.t[i] > 200.0) worst_indoor = std::max(worst_indoor, (a.estimate[i] - a.truth[i]).norm());
+  EXPECT_LT(worst_indoor, 2.0) << "after the re-anchoring the filter stays on the track";
+}
+
+// While a filter stays on its track the check never fires, and its track is the one without
+// the check, bit for bit (seed 11: EKF-IDR and the federated filter).
+TEST(RegionPipeline, IntegrityCheckIsSilentWhileAFilterIsOnItsTrack) {
+  ri::Settings without;
+  without.uwb_integrity = false;
+  for (const auto e : {ri::Estimator::idr, ri::Estimator::fkf}) {
+    const auto a = ri::run(drive(), e, ri::Settings{});
+    const auto b = ri::run(drive(), e, without);
+    EXPECT_EQ(a.integrity_faults, 0) << ri::name(e);
+    ASSERT_EQ(a.t.size(), b.t.size());
+    for (std::size_t i = 0; i < a.t.size(); ++i) ASSERT_EQ(a.estimate[i], b.estimate[i]) << ri::name(e) << " epoch " << i;
+  }
+}
+
+// Seed 11: EKF-I-OTR enters the garage behind the truth and falls 7-9 m behind (the ranges
+// it gates and the ones it accepts leave it there for tens of seconds). The check fires once,
+// and where the tracks part the re-anchored one is back within a metre.
+TEST(RegionPipeline, IntegrityCheckCorrectsAFilterThatFellBehindAtTheDoor) {
+  ri::Settings without;
+  without.uwb_integrity = false;
+  const auto a = ri::run(drive(), ri::Estimator::iotr, ri::Settings{});
+  const auto b = ri::run(drive(), ri::Estimator::iotr, without);
+  EXPECT_EQ(a.integrity_faults, 1);
+  ASSERT_EQ(a.t.size(), b.t.size());
+  std::size_t i = 0;
+  while (i < a.t.size() && a.estimate[i] == b.estimate[i]) ++i;
+  ASSERT_LT(i, a.t.size()) << "the check changed nothing";
+  EXPECT_EQ(a.region[i], 2);
+  EXPECT_GT((b.estimate[i] - b.truth[i]).norm(), 5.0);
+  EXPECT_LT((a.estimate[i] - a.truth[i]).norm(), 1.0);
+  EXPECT_LT(ri::errors(a).mean[2], 0.5 * ri::errors(b).mean[2]);
+}
+
+// reanchor() against its definition, entry by entry.
+TEST(RegionPipeline, ReanchorTakesPositionVelocityAndHeadingFromTheFault) {
+  using L = ri::L;
+  ri::Settings s;
+  Gaussian<L::size> b;
+  b.mean << 1, 2, 3, 4, 0.5, 0.01, 0.02, 0.03;
+  Eigen::Matrix<double, L::size, L::size> A = Eigen::Matrix<double, L::size, L::size>::Random();
+  b.cov = A * A.transpose() + Eigen::Matrix<double, L::size, L::size>::Identity();
+  const auto before = b;
+  ri::detail::UwbIntegrity::Fault f;
+  f.position = Eigen::Vector2d(40.0, -3.0);
+  f.cov << 0.02, 0.005, 0.005, 0.03;
+  f.velocity = Eigen::Vector2d(-2.0, 2.0);
+  ri::detail::reanchor(b, f, s);
+  EXPECT_EQ(L::get<"p">(b.mean), f.position);
+  EXPECT_EQ(L::get<"v">(b.mean), *f.velocity);
+  EXPECT_NEAR(L::get<"psi">(b.mean)(0), 0.75 * std::numbers::pi, 1e-12);
+  EXPECT_EQ(b.mean.tail<3>(), before.mean.tail<3>()) << "biases kept";
+  const double var_p = s.reanchor_position_sigma * s.reanchor_position_sigma;
+  for (int i = 0; i < L::size; ++i)
+    for (int j = 0; j < L::size; ++j) {
+      double expected = 0.0;
+      if (i < 2 && j < 2) expected = f.cov(i, j) + (i == j ? var_p : 0.0);
+      else if (i < 4 && j < 4 && i >= 2 && j >= 2) expected = i == j ? s.reanchor_velocity_sigma * s.reanchor_velocity_sigma : 0.0;
+      else if (i == 4 && j == 4) expected = s.reanchor_heading_sigma * s.reanchor_heading_sigma;
+      else if (i >= 5 && j >= 5) expected = before.cov(i, j);
+      EXPECT_EQ(b.cov(i, j), expected) << i << ", " << j;
+    }
+  // Slower than reanchor_min_speed: the heading is kept.
+  Gaussian<L::size> slow = before;
+  f.velocity = Eigen::Vector2d(0.3, 0.0);
+  ri::detail::reanchor(slow, f, s);
+  EXPECT_EQ(L::get<"psi">(slow.mean)(0), 0.5);
 }
 
 }  // namespace

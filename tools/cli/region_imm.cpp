@@ -201,6 +201,15 @@ void run_section(const DemoContext& ctx, Json& json, std::ostream& out) {
   }
   out << "  what routing can exclude: UWB ranges at " << uwb_epochs[0] << " of " << epochs[0]
       << " outdoor epochs, GNSS fixes at " << fix_epochs[2] << " of " << epochs[2] << " indoor epochs\n";
+  // The UWB integrity check (Settings::uwb_integrity): how often it re-anchored each filter.
+  out << "  UWB integrity re-anchorings:";
+  for (std::size_t i = 0; i < kPaperMean.size(); ++i) {
+    const auto e = kPaperMean[i].estimator;
+    if (e == ri::Estimator::gnss || e == ri::Estimator::uwb || e == ri::Estimator::odr) continue;
+    out << ' ' << kPaperMean[i].label << ' ' << tracks[i].integrity_faults;
+    json.set(std::string("integrity_faults.") + ri::name(e), tracks[i].integrity_faults);
+  }
+  out << '\n';
   json.set("routing.outdoor_epochs_with_uwb", uwb_epochs[0]);
   json.set("routing.indoor_epochs_with_gnss_fix", fix_epochs[2]);
   json.set("ordering.overall_holds", order_overall);

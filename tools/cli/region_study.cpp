@@ -338,6 +338,11 @@ SeedResult study_seed(const sim::DriveConfig& cfg, const ri::Settings& s, std::o
   report_gates("FKF", g_fkf, 1, out, json["gates"]["fkf"]);
   report_gates("IMM", g_imm, kMaxTakers, out, json["gates"]["imm"]);
   report_gates("regionIMM", g_rimm, kMaxTakers, out, json["gates"]["region_imm"]);
+  out << fmt("  UWB integrity re-anchorings (policies/integrity.hpp): FKF %d, IMM %d, region IMM %d\n", fkf.integrity.faults,
+             imm.integrity.faults, rimm.integrity.faults);
+  json["integrity_faults"]["fkf"] = fkf.integrity.faults;
+  json["integrity_faults"]["imm"] = imm.integrity.faults;
+  json["integrity_faults"]["region_imm"] = rimm.integrity.faults;
 
   SeedResult res;
   res.seed = cfg.seed;
@@ -423,7 +428,7 @@ void report_summary(const std::vector<SeedResult>& results, std::string_view hea
 // ------------------------------------------------------------------ command
 int region_study(Args args, std::ostream& out, std::ostream& err) {
   if (wants_help(args)) {
-    out << "usage: ctxfuse region-study " << kScenarioFlagsUsage << " [--seeds LIST] [--ungated] [--json FILE]\n"
+    out << "usage: ctxfuse region-study " << kScenarioFlagsUsage << " [--seeds LIST] [--ungated] [--no-integrity] [--json FILE]\n"
         << "Per simulated drive (seed): the sensor picture per zone of the drive (out-far, out-near = within\n"
            "30 m of the approach mouth, tr-mouth / tr-door = street / door half of the approach, in-door10 =\n"
            "indoor within 10 m of the door, in-deep), the GNSS/UWB updates each estimator's chi-square gate\n"
@@ -432,16 +437,20 @@ int region_study(Args args, std::ostream& out, std::ostream& err) {
            "`ctxfuse demo` (seeds N+101..N+103, validation N+202).\n"
            "  --seeds LIST     e.g. 1-5, 1,3,7 or 1-3,9 (default: 1-5)\n"
            "  --ungated        no chi-square gate (gate probability 1; the lock-out recovery never fires)\n"
+           "  --no-integrity   no UWB integrity check (Settings::uwb_integrity off: no re-anchoring to\n"
+           "                   snapshot multilaterations)\n"
            "  --json FILE      every printed number also as JSON\n"
         << kScenarioFlagsHelp;
     return 0;
   }
-  // FlagParser takes flags with values only; --ungated is a switch.
+  // FlagParser takes flags with values only; --ungated and --no-integrity are switches.
   std::vector<std::string_view> rest;
-  bool ungated = false;
+  bool ungated = false, no_integrity = false;
   for (auto a : args) {
     if (a == "--ungated")
       ungated = true;
+    else if (a == "--no-integrity")
+      no_integrity = true;
     else
       rest.push_back(a);
   }
@@ -462,11 +471,14 @@ int region_study(Args args, std::ostream& out, std::ostream& err) {
 
   ri::Settings settings;
   if (ungated) settings.gate_probability = 1.0;
-  const std::string header = "scenario " + scenario + ", " + (ungated ? std::string("ungated") : fmt("gate %g", settings.gate_probability));
+  settings.uwb_integrity = !no_integrity;
+  const std::string header = "scenario " + scenario + ", " + (ungated ? std::string("ungated") : fmt("gate %g", settings.gate_probability)) +
+                             (no_integrity ? ", no integrity check" : "");
   out << "region study: " << header << "\n";
   Json doc;
   doc["scenario"] = scenario;
   doc["ungated"] = ungated;
+  doc["uwb_integrity"] = !no_integrity;
   doc["gate_probability"] = settings.gate_probability;
   Json per_seed = Json::array();
   std::vector<SeedResult> results;

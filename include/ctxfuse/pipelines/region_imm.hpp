@@ -47,6 +47,7 @@
 #include "ctxfuse/models/planar.hpp"
 #include "ctxfuse/policies/gating.hpp"
 #include "ctxfuse/policies/health.hpp"
+#include "ctxfuse/policies/integrity.hpp"
 #include "ctxfuse/policies/mixing.hpp"
 #include "ctxfuse/sim/drive.hpp"
 
@@ -237,6 +238,20 @@ struct Settings {
   policies::SourceHealthOptions health{};
   double recovery_position_sigma = 2.0;  // [m]
   double recovery_velocity_sigma = 0.5;  // [m/s]
+  // Integrity against a wrong solution that no gate can see (policies/integrity.hpp): with
+  // two anchors in reach a filter may settle on the mirror image of its track about their
+  // line, where their ranges keep being accepted. A snapshot multilateration of one UWB time
+  // stamp with at least `integrity_min_anchors` ranges (two more than the unknowns, so that
+  // its residual test can see one NLOS range) is checked against every filter that takes UWB;
+  // `integrity.consecutive` gross disagreements in a row re-anchor the filter: position from
+  // the snapshot, velocity and heading from the run of snapshots (see reanchor()).
+  bool uwb_integrity = true;
+  int integrity_min_anchors = 4;
+  policies::SnapshotIntegrityOptions integrity{};
+  double reanchor_position_sigma = 0.5;  // [m] added to the snapshot's own uncertainty
+  double reanchor_velocity_sigma = 1.0;  // [m/s]
+  double reanchor_heading_sigma = 0.3;   // [rad]
+  double reanchor_min_speed = 1.0;       // [m/s] below it the heading is kept
   // Initial uncertainty.
   double init_position_sigma = 3.0, init_velocity_sigma = 0.2, init_heading_sigma_deg = 2.0;
   double init_gyro_bias_sigma = 1e-3, init_accel_bias_sigma = 0.05;
@@ -280,6 +295,9 @@ struct Track {
   // alone only with a fix and UWB alone only while its tracker is locked, and at the other
   // epochs they are scored at the position they held (see errors()).
   std::vector<bool> solution;
+  // Times the UWB integrity check re-anchored the filter (Settings::uwb_integrity; IMU-driven
+  // filters that take UWB only).
+  int integrity_faults = 0;
 };
 
 struct GnssTag {};
@@ -490,6 +508,57 @@ inline std::optional<UwbSnapshot> multilaterate(std::span<const sim::UwbRange> r
   return UwbSnapshot{p, sigma * sigma * JtJ.inverse()};
 }
 
+/// The UWB integrity monitor of one IMU-driven filter (Settings::uwb_integrity): gathers the
+/// ranges of one time stamp and, once the stamp is complete (the replay has moved on to the
+/// next IMU step), checks their snapshot multilateration against the filter's position.
+struct UwbIntegrity {
+  using Fault = policies::SnapshotIntegrity<2>::Fault;
+  const Settings& s;
+  policies::SnapshotIntegrity<2> monitor{s.integrity};
+  std::vector<sim::UwbRange> ranges{};  // of one time stamp, one per anchor
+  int faults = 0;
+  void add(const sim::UwbRange& r) {
+    if (!s.uwb_integrity) return;
+    if (!ranges.empty() && std::abs(ranges.front().t - r.t) > 1e-9) ranges.clear();
+    ranges.push_back(r);
+  }
+  /// The fault, if the stamp gathered so far completes a run of disagreements with `b`.
+  std::optional<Fault> flush(const Gaussian<L::size>& b) {
+    if (ranges.empty()) return std::nullopt;
+    std::optional<Fault> fault;
+    if (static_cast<int>(ranges.size()) >= s.integrity_min_anchors) {
+      if (const auto snap = multilaterate(ranges, s.uwb_tag_height, s.uwb_sigma, 3.0 * s.uwb_sigma))
+        fault = monitor.check(ranges.front().t, snap->position, snap->cov, L::get<"p">(b.mean),
+                              L::cov<"p">(b.cov));
+    }
+    ranges.clear();
+    if (fault) ++faults;
+    return fault;
+  }
+};
+
+/// Re-anchors a belief after an integrity fault: the position is the snapshot's, the velocity
+/// the run's mean velocity, the heading that velocity's direction when the vehicle moved
+/// faster than `reanchor_min_speed` (kept otherwise); their cross-covariances with everything
+/// else are dropped, the sensor biases and their covariance kept. The filter's own velocity
+/// and heading are not worth keeping: on a mirror track they are the true ones reflected.
+inline void reanchor(Gaussian<L::size>& b, const UwbIntegrity::Fault& f, const Settings& s) {
+  constexpr int kinematic = L::size_of<"p">() + L::size_of<"v">() + L::size_of<"psi">();
+  static_assert(L::offset<"p">() == 0 && L::offset<"v">() == 2 && L::offset<"psi">() == 4,
+                "reanchor assumes p, v, psi lead the layout");
+  b.cov.topRows<kinematic>().setZero();
+  b.cov.leftCols<kinematic>().setZero();
+  L::get<"p">(b.mean) = f.position;
+  L::cov<"p">(b.cov) = f.cov + Eigen::Matrix2d::Identity() * (s.reanchor_position_sigma * s.reanchor_position_sigma);
+  const double var_v = s.reanchor_velocity_sigma * s.reanchor_velocity_sigma;
+  if (f.velocity) {
+    L::get<"v">(b.mean) = *f.velocity;
+    if (f.velocity->norm() > s.reanchor_min_speed) L::get<"psi">(b.mean)(0) = std::atan2(f.velocity->y(), f.velocity->x());
+  }
+  L::cov<"v">(b.cov) = Eigen::Matrix2d::Identity() * var_v;
+  L::cov<"psi">(b.cov)(0, 0) = s.reanchor_heading_sigma * s.reanchor_heading_sigma;
+}
+
 /// UWB alone: the ranges in a constant-velocity EKF (no IMU), as a UWB positioning system
 /// runs its own tracker. The track starts from a snapshot multilateration of one epoch's
 /// ranges (at least 3 anchors, residuals consistent with line of sight), and is re-anchored
@@ -578,11 +647,20 @@ struct SingleModel {
   Track track;
   std::optional<Ekf<models::PlanarImuModel, ChiSquareGate>> f;
   FilterHealth health{s};
+  UwbIntegrity integrity{s};
   void start(double t0, const Eigen::Vector2d& p0) {
     f.emplace(process_model(s, process_factor), initial_belief(d, s, t0, p0), FilterOptions{},
               ChiSquareGate(s.gate_probability));
   }
-  void predict(const models::PlanarImu& u, double dt) { (void)f->predict(u, dt); }
+  void predict(const models::PlanarImu& u, double dt) {
+    if (const auto fault = integrity.flush(f->belief())) {
+      auto b = f->belief();
+      reanchor(b, *fault, s);
+      f->reset(b);
+      health.recovered();
+    }
+    (void)f->predict(u, dt);
+  }
   void cycle_start() {}
   void speed(const sim::SpeedSample& v) {
     if (s.use_speed)
@@ -591,7 +669,9 @@ struct SingleModel {
       (void)f->update(nhc_meas(s), Vector<1>(0.0));
   }
   void uwb(const sim::UwbRange& r) {
-    if (takes_uwb) health.uwb.record(r.t, f->update(uwb_meas(r, s, meas_factor), Vector<1>(r.range_m)));
+    if (!takes_uwb) return;
+    health.uwb.record(r.t, f->update(uwb_meas(r, s, meas_factor), Vector<1>(r.range_m)));
+    integrity.add(r);
   }
   void gnss(const sim::GnssEpoch& e) {
     if (takes_gnss) health.gnss.record(e.t, f->update(gnss_meas(e, s, meas_factor), Vector<2>(e.position.head<2>())));
@@ -615,10 +695,19 @@ struct Federated {
   std::array<double, 2> beta{0.5, 0.5};
   std::optional<fkf::FederatedFilter<models::PlanarImuModel, 2, ChiSquareGate>> f;
   FilterHealth health{s};
+  UwbIntegrity integrity{s};  // against the UWB local filter
   void start(double t0, const Eigen::Vector2d& p0) {
     f.emplace(process_model(s, 1.0), initial_belief(d, s, t0, p0), beta, FilterOptions{}, ChiSquareGate(s.gate_probability));
   }
-  void predict(const models::PlanarImu& u, double dt) { (void)f->predict(u, dt); }
+  void predict(const models::PlanarImu& u, double dt) {
+    if (const auto fault = integrity.flush(f->local(1))) {
+      auto g = f->global();
+      reanchor(g, *fault, s);
+      f->reset(g);
+      health.recovered();
+    }
+    (void)f->predict(u, dt);
+  }
   void cycle_start() {}
   void speed(const sim::SpeedSample& v) {
     for (int i = 0; i < 2; ++i) {
@@ -629,7 +718,10 @@ struct Federated {
         (void)f->update(i, nhc_meas(s, share), Vector<1>(0.0));
     }
   }
-  void uwb(const sim::UwbRange& r) { health.uwb.record(r.t, f->update(1, uwb_meas(r, s), Vector<1>(r.range_m))); }
+  void uwb(const sim::UwbRange& r) {
+    health.uwb.record(r.t, f->update(1, uwb_meas(r, s), Vector<1>(r.range_m)));
+    integrity.add(r);
+  }
   void gnss(const sim::GnssEpoch& e) {
     health.gnss.record(e.t, f->update(0, gnss_meas(e, s), Vector<2>(e.position.head<2>())));
   }
@@ -676,6 +768,9 @@ struct ImmSink {
   // seed 1), EKF-IDR stayed dominant, ODR and I-OTR gated every fix and the estimate drifted
   // to 135 m. A lock-out of the IMM widens every mode.
   FilterHealth imm_health{s};
+  // Integrity of the IMM's output; a fault re-anchors every mode (the next mixing would
+  // re-centre a re-anchored mode on the others).
+  UwbIntegrity integrity{s};
   std::size_t epoch = 0;
   int region = -1;
 
@@ -699,7 +794,16 @@ struct ImmSink {
     if (region == 0) return gnss ? 0b111u : 0u;  // outdoor: nobody takes UWB
     return gnss ? 0u : 0b111u;                   // indoor: nobody takes GNSS
   }
-  void predict(const models::PlanarImu& u, double dt) { (void)f->predict(u, dt); }
+  void predict(const models::PlanarImu& u, double dt) {
+    if (!integrity.ranges.empty())
+      if (const auto fault = integrity.flush(f->combined())) {
+        boost::hana::for_each(boost::hana::make_tuple(boost::hana::int_c<0>, boost::hana::int_c<1>, boost::hana::int_c<2>),
+                              [&](auto j) { reanchor(f->template mode_belief<j.value>(), *fault, s); });
+        for (auto& h : health) h.recovered();
+        imm_health.recovered();
+      }
+    (void)f->predict(u, dt);
+  }
   void cycle_start() {}
   void speed(const sim::SpeedSample& v) {
     if (s.use_speed)
@@ -710,6 +814,7 @@ struct ImmSink {
   void uwb(const sim::UwbRange& r) {
     const auto m = boost::hana::make_tuple(uwb_meas(r, s), uwb_meas(r, s, s.iotr_noise_factor), uwb_meas(r, s));
     record_health(r.t, f->update(UwbTag{}, m, Vector<1>(r.range_m), mask(false)), false);
+    if (mask(false) != 0u) integrity.add(r);
   }
   // Each mode keeps its own health: a mode that has locked itself out recovers alone.
   void record_health(double t, const imm::UpdateResult<3>& result, bool gnss) {
@@ -775,17 +880,20 @@ inline Track run(const sim::Drive& d, Estimator e, const Settings& s, const std:
       detail::SingleModel sink{d, s, k != 2, k != 0, s.mode_process_noise_factor[static_cast<std::size_t>(k)],
                                k == 1 ? s.iotr_noise_factor : 1.0, {}, {}};
       detail::replay(d, sink);
+      sink.track.integrity_faults = sink.integrity.faults;
       return sink.track;
     }
     case Estimator::fkf: {
       detail::Federated sink{d, s, {}, {0.5, 0.5}, {}};
       detail::replay(d, sink);
+      sink.track.integrity_faults = sink.integrity.faults;
       return sink.track;
     }
     case Estimator::imm: {
       detail::ImmSink<policies::FixedTransition<3>> sink{
           d, s, policies::FixedTransition<3>(policies::sticky_transition<3>(s.stay_probability)), nullptr, nullptr, {}, {}};
       detail::replay(d, sink);
+      sink.track.integrity_faults = sink.integrity.faults;
       return sink.track;
     }
     case Estimator::region_imm: {
@@ -796,6 +904,7 @@ inline Track run(const sim::Drive& d, Estimator e, const Settings& s, const std:
                                                 1.0 - s.prior_weight),
           labels, nullptr, {}, {}};
       detail::replay(d, sink);
+      sink.track.integrity_faults = sink.integrity.faults;
       return sink.track;
     }
     case Estimator::region_imm_posterior: {
@@ -809,6 +918,7 @@ inline Track run(const sim::Drive& d, Estimator e, const Settings& s, const std:
                s.posterior_pull),
           labels, posteriors, {}, {}};
       detail::replay(d, sink);
+      sink.track.integrity_faults = sink.integrity.faults;
       return sink.track;
     }
   }
