@@ -508,6 +508,12 @@ inline std::optional<UwbSnapshot> multilaterate(std::span<const sim::UwbRange> r
   return UwbSnapshot{p, sigma * sigma * JtJ.inverse()};
 }
 
+/// Adds `r` to the ranges of one time stamp, starting a new stamp when `r` has another time.
+inline void add_to_stamp(std::vector<sim::UwbRange>& stamp, const sim::UwbRange& r) {
+  if (!stamp.empty() && std::abs(stamp.front().t - r.t) > 1e-9) stamp.clear();
+  stamp.push_back(r);
+}
+
 /// The UWB integrity monitor of one IMU-driven filter (Settings::uwb_integrity): gathers the
 /// ranges of one time stamp and, once the stamp is complete (the replay has moved on to the
 /// next IMU step), checks their snapshot multilateration against the filter's position.
@@ -518,9 +524,7 @@ struct UwbIntegrity {
   std::vector<sim::UwbRange> ranges{};  // of one time stamp, one per anchor
   int faults = 0;
   void add(const sim::UwbRange& r) {
-    if (!s.uwb_integrity) return;
-    if (!ranges.empty() && std::abs(ranges.front().t - r.t) > 1e-9) ranges.clear();
-    ranges.push_back(r);
+    if (s.uwb_integrity) add_to_stamp(ranges, r);
   }
   /// The fault, if the stamp gathered so far completes a run of disagreements with `b`.
   std::optional<Fault> flush(const Gaussian<L::size>& b) {
@@ -571,7 +575,6 @@ inline void reanchor(Gaussian<L::size>& b, const UwbIntegrity::Fault& f, const S
 /// system reports when it loses the tag).
 struct UwbOnly {
   using Cv = models::ConstantVelocity<L, 2>;
-  static constexpr double kDisagreement = 13.8155;  // chi-square 0.999 quantile, 2 dof
   const sim::Drive& d;
   const Settings& s;
   Track track{};
@@ -599,18 +602,19 @@ struct UwbOnly {
   }
   void cycle_start() {}
   void speed(const sim::SpeedSample&) {}
-  bool disagrees(const UwbSnapshot& snap) const {
+  // The integrity check with the chi-square test (0.999, 2 dof) alone and one snapshot
+  // enough: a snapshot tracker has no IMU to carry it through an NLOS stamp, so it follows
+  // every snapshot that disagrees.
+  policies::SnapshotIntegrity<2> mirror_check{{.probability = 0.999, .min_error_m = 0.0, .consecutive = 1}};
+  bool disagrees(const UwbSnapshot& snap, double t) {
     const auto& b = f->belief();
-    const Eigen::Vector2d dp = snap.position - L::get<"p">(b.mean);
-    const Eigen::Matrix2d S = snap.cov + Eigen::Matrix2d(L::cov<"p">(b.cov));
-    return dp.dot(S.ldlt().solve(dp)) > kDisagreement;
+    return mirror_check.check(t, snap.position, snap.cov, L::get<"p">(b.mean), L::cov<"p">(b.cov)).has_value();
   }
   void uwb(const sim::UwbRange& r) {
     last_range_t = now;
-    if (!epoch_ranges.empty() && std::abs(epoch_ranges.front().t - r.t) > 1e-9) epoch_ranges.clear();
-    epoch_ranges.push_back(r);
+    add_to_stamp(epoch_ranges, r);
     const auto snap = multilaterate(epoch_ranges, s.uwb_tag_height, s.uwb_sigma, 3.0 * s.uwb_sigma);
-    if (snap && (!locked || disagrees(*snap))) {
+    if (snap && (!locked || disagrees(*snap, r.t))) {
       Gaussian<L::size> b = f->belief();
       L::get<"p">(b.mean) = snap->position;
       b.cov = SquareMatrix<L::size>::Identity();
@@ -794,11 +798,16 @@ struct ImmSink {
     if (region == 0) return gnss ? 0b111u : 0u;  // outdoor: nobody takes UWB
     return gnss ? 0u : 0b111u;                   // indoor: nobody takes GNSS
   }
+  /// Calls fn(j) with j = hana::int_c<0>, <1>, <2>: one call per mode.
+  template <class Fn>
+  static void for_each_mode(Fn&& fn) {
+    boost::hana::for_each(boost::hana::make_tuple(boost::hana::int_c<0>, boost::hana::int_c<1>, boost::hana::int_c<2>), fn);
+  }
   void predict(const models::PlanarImu& u, double dt) {
+    // Checked only after a stamp of ranges: combined() is not free, and this runs at 100 Hz.
     if (!integrity.ranges.empty())
       if (const auto fault = integrity.flush(f->combined())) {
-        boost::hana::for_each(boost::hana::make_tuple(boost::hana::int_c<0>, boost::hana::int_c<1>, boost::hana::int_c<2>),
-                              [&](auto j) { reanchor(f->template mode_belief<j.value>(), *fault, s); });
+        for_each_mode([&](auto j) { reanchor(f->template mode_belief<j.value>(), *fault, s); });
         for (auto& h : health) h.recovered();
         imm_health.recovered();
       }
@@ -837,16 +846,15 @@ struct ImmSink {
     f->update_mode_probabilities();
     record(track, d, e, L::get<"p">(f->combined().mean), f->most_probable());
     const bool imm_lockout = imm_health.lockout(e.t);
-    boost::hana::for_each(boost::hana::make_tuple(boost::hana::int_c<0>, boost::hana::int_c<1>, boost::hana::int_c<2>),
-                          [&](auto j) {
-                            auto& h = health[static_cast<std::size_t>(j.value)];
-                            const bool own = h.lockout(e.t);
-                            if (!own && !imm_lockout) return;
-                            if (imm_lockout) h.recovered();  // the mode's counts restart with the IMM's
-                            auto& b = f->template mode_belief<j.value>();
-                            const Eigen::Vector2d p = L::get<"p">(b.mean);
-                            widen(b.cov, s, std::max(own ? h.reach(e, p) : 0.0, imm_lockout ? imm_health.reach(e, p) : 0.0));
-                          });
+    for_each_mode([&](auto j) {
+      auto& h = health[static_cast<std::size_t>(j.value)];
+      const bool own = h.lockout(e.t);
+      if (!own && !imm_lockout) return;
+      if (imm_lockout) h.recovered();  // the mode's counts restart with the IMM's
+      auto& b = f->template mode_belief<j.value>();
+      const Eigen::Vector2d p = L::get<"p">(b.mean);
+      widen(b.cov, s, std::max(own ? h.reach(e, p) : 0.0, imm_lockout ? imm_health.reach(e, p) : 0.0));
+    });
     // Next cycle: the region recognised at this epoch (the latest known) routes the
     // measurements until the next epoch.
     epoch = static_cast<std::size_t>(std::lround(e.t * d.config.gnss.rate_hz));
@@ -854,6 +862,15 @@ struct ImmSink {
     f->mix();
   }
 };
+
+/// Replays the drive through `sink` and returns its track, with the count of integrity
+/// re-anchorings for the sinks that have the check.
+template <class Sink>
+Track track_of(const sim::Drive& d, Sink& sink) {
+  replay(d, sink);
+  if constexpr (requires { sink.integrity.faults; }) sink.track.integrity_faults = sink.integrity.faults;
+  return sink.track;
+}
 
 }  // namespace detail
 
@@ -865,13 +882,11 @@ inline Track run(const sim::Drive& d, Estimator e, const Settings& s, const std:
   switch (e) {
     case Estimator::gnss: {
       detail::GnssOnly sink{d, {}};
-      detail::replay(d, sink);
-      return sink.track;
+      return detail::track_of(d, sink);
     }
     case Estimator::uwb: {
       detail::UwbOnly sink{.d = d, .s = s};
-      detail::replay(d, sink);
-      return sink.track;
+      return detail::track_of(d, sink);
     }
     case Estimator::odr:
     case Estimator::iotr:
@@ -879,22 +894,16 @@ inline Track run(const sim::Drive& d, Estimator e, const Settings& s, const std:
       const int k = e == Estimator::odr ? 0 : e == Estimator::iotr ? 1 : 2;
       detail::SingleModel sink{d, s, k != 2, k != 0, s.mode_process_noise_factor[static_cast<std::size_t>(k)],
                                k == 1 ? s.iotr_noise_factor : 1.0, {}, {}};
-      detail::replay(d, sink);
-      sink.track.integrity_faults = sink.integrity.faults;
-      return sink.track;
+      return detail::track_of(d, sink);
     }
     case Estimator::fkf: {
       detail::Federated sink{d, s, {}, {0.5, 0.5}, {}};
-      detail::replay(d, sink);
-      sink.track.integrity_faults = sink.integrity.faults;
-      return sink.track;
+      return detail::track_of(d, sink);
     }
     case Estimator::imm: {
       detail::ImmSink<policies::FixedTransition<3>> sink{
           d, s, policies::FixedTransition<3>(policies::sticky_transition<3>(s.stay_probability)), nullptr, nullptr, {}, {}};
-      detail::replay(d, sink);
-      sink.track.integrity_faults = sink.integrity.faults;
-      return sink.track;
+      return detail::track_of(d, sink);
     }
     case Estimator::region_imm: {
       if (!labels) throw std::invalid_argument("region_imm: the region-aware IMM needs the recognised labels");
@@ -903,9 +912,7 @@ inline Track run(const sim::Drive& d, Estimator e, const Settings& s, const std:
           policies::RegionAdaptiveTransition<3>(policies::sticky_transition<3>(s.stay_probability), s.prior_weight,
                                                 1.0 - s.prior_weight),
           labels, nullptr, {}, {}};
-      detail::replay(d, sink);
-      sink.track.integrity_faults = sink.integrity.faults;
-      return sink.track;
+      return detail::track_of(d, sink);
     }
     case Estimator::region_imm_posterior: {
       if (!labels || !posteriors)
@@ -917,9 +924,7 @@ inline Track run(const sim::Drive& d, Estimator e, const Settings& s, const std:
                                                      1.0 - s.prior_weight),
                s.posterior_pull),
           labels, posteriors, {}, {}};
-      detail::replay(d, sink);
-      sink.track.integrity_faults = sink.integrity.faults;
-      return sink.track;
+      return detail::track_of(d, sink);
     }
   }
   return {};

@@ -19,7 +19,7 @@
 // Why both tests and a run. Snapshots are not outlier-free: a line-of-sight-looking NLOS range
 // among four shifts the solution by 0.5-3 m with a covariance that does not know it, and then
 // the chi-square test alone disagrees with a good filter for many epochs in a row (default
-// scenario: runs of up to 47 snapshots, 27-99 per drive). A filter within a few metres of the
+// scenario, a federated filter on its track: 27-50 snapshots per drive, runs of up to 16). A filter within a few metres of the
 // truth is the lock-out recovery's business; the gross-error floor keeps this check to the
 // failures that recovery cannot see. The run keeps one unlucky snapshot from moving a filter.
 #pragma once
@@ -103,9 +103,6 @@ class SnapshotIntegrity {
     run_ = 0;
     return f;
   }
-
-  /// Forgets the current run (e.g. after the filter was re-anchored by other means).
-  void reset() { run_ = 0; }
 
   int run() const { return run_; }
   double threshold() const { return threshold_; }
