@@ -1,0 +1,175 @@
+// Reader of one dynamic case of the Hanyang outdoor UWB dataset
+// (Dynamic_measurements/{LOS,NLOS}/Trajectory_*/Case_*/): the per-anchor range files A<id>.csv
+// merged into one time-ordered stream of io::UwbRange, and the case's reference trajectory
+// (trajectory.csv), which is truth and so is read by its own function into its own type.
+//
+// - Range files are rosbag exports: "%time,field.stamp,field.id,field.x,...". Columns are
+//   found by name with the "%" and "field." decorations dropped, so a re-export with plain
+//   names reads the same. The time used is the bag's record time `%time` [ns].
+// - Every row of A<id>.csv must carry anchor id <id>: a file renamed or mixed up would
+//   otherwise silently move an anchor.
+// - The DW1000 reports -inf power when its estimate fails; such rows keep their range (the
+//   two-way time of flight is unaffected) with NaN RSSI, and are counted.
+// - Times must strictly increase within each file; the merge orders by time, then anchor id.
+#pragma once
+
+#include <ctxfuse/io/messages.hpp>
+#include <ctxfuse/io/text.hpp>
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace ctxfuse::io {
+
+struct HanyangRange {
+  std::int64_t t_ns = 0;  // exact stamp; range.t is the same in seconds (rounded to ~0.2 us)
+  UwbRange range;
+};
+
+struct HanyangUwbCase {
+  std::vector<HanyangRange> ranges;  // all anchors, time order
+  std::map<int, std::size_t> ranges_per_anchor;
+  std::size_t non_finite_rssi = 0;  // rows kept with NaN rssi and/or rssi_fp
+  std::vector<std::string> files;
+
+  std::vector<UwbRange> uwb_ranges() const {
+    std::vector<UwbRange> out;
+    out.reserve(ranges.size());
+    for (const auto& r : ranges) out.push_back(r.range);
+    return out;
+  }
+};
+
+/// One reference sample of the case (truth: for scoring only, never a filter input).
+struct HanyangReferencePose {
+  double t = 0.0;  // seconds, same clock as the ranges
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  double heading_deg = 0.0;  // unwrapped as recorded: it runs past +-360 on a looped track
+};
+
+namespace detail {
+
+inline std::string_view bare_column_name(std::string_view s) {
+  if (!s.empty() && s.front() == '%') s.remove_prefix(1);
+  if (s.substr(0, 6) == "field.") s.remove_prefix(6);
+  return s;
+}
+
+/// Reads the header line of `file` and returns the 0-based index of each wanted name.
+template <std::size_t N>
+std::array<std::size_t, N> header_columns(TextFile& file, Header& header, const std::array<std::string_view, N>& wanted) {
+  std::string_view line;
+  if (!file.next(line)) file.fail("empty file (no header)");
+  header = Header(split_fields(line, Separator::comma));
+  std::array<std::size_t, N> idx{};
+  for (std::size_t k = 0; k < N; ++k) {
+    std::size_t i = 0;
+    while (i < header.size() && bare_column_name(header.name(i)) != wanted[k]) ++i;
+    if (i == header.size()) file.fail(cat("header has no column ", quote(wanted[k])));
+    idx[k] = i;
+  }
+  return idx;
+}
+
+inline double seconds_of(std::int64_t t_ns) {
+  // Split first so that the sub-second part keeps its nanoseconds before the sum rounds.
+  return static_cast<double>(t_ns / 1'000'000'000) + static_cast<double>(t_ns % 1'000'000'000) * 1e-9;
+}
+
+/// "A12.csv" -> 12; -1 for any other name.
+inline int anchor_of_file_name(const std::string& name) {
+  if (name.size() < 6 || name.front() != 'A' || name.substr(name.size() - 4) != ".csv") return -1;
+  int id = -1;
+  return parse_integer(std::string_view(name).substr(1, name.size() - 5), id, 0, 1'000'000) == NumberError::none ? id : -1;
+}
+
+inline void read_hanyang_anchor_file(const std::filesystem::path& path, int anchor, HanyangUwbCase& out) {
+  TextFile file(path);
+  Header header;
+  const auto c = header_columns<8>(file, header, {"time", "id", "x", "y", "z", "distanceFromTag", "rssi", "rssi_fp"});
+  Fields f(file.name(), &header);
+  RealRules power;
+  power.allow_non_finite = true;
+  std::int64_t previous = 0;
+  std::size_t previous_line = 0, count = 0;
+  while (next_fields(file, f, Separator::comma)) {
+    f.expect_count(header.size());
+    HanyangRange r;
+    r.t_ns = f.integer<std::int64_t>(c[0], 0, std::numeric_limits<std::int64_t>::max());
+    if (count > 0 && r.t_ns <= previous)
+      f.fail(c[0], cat("time ", r.t_ns, " is not after the previous row's (line ", previous_line, ")"));
+    r.range.t = seconds_of(r.t_ns);
+    r.range.anchor_id = f.integer<int>(c[1], 0, 1'000'000);
+    if (r.range.anchor_id != anchor)
+      f.fail(c[1], cat("anchor id ", r.range.anchor_id, " in the file of anchor ", anchor));
+    for (int k = 0; k < 3; ++k) r.range.anchor_position[k] = f.real_in(c[2 + static_cast<std::size_t>(k)], -1e5, 1e5);
+    r.range.range_m = f.real_in(c[5], 0.0, 1000.0);
+    const double rssi = f.real_in(c[6], -200.0, 50.0, power), fp = f.real_in(c[7], -200.0, 50.0, power);
+    r.range.rssi_dbm = std::isfinite(rssi) ? rssi : kUnknown;
+    r.range.rssi_first_path_dbm = std::isfinite(fp) ? fp : kUnknown;
+    out.non_finite_rssi += !std::isfinite(rssi) || !std::isfinite(fp);
+    previous = r.t_ns;
+    previous_line = file.line_number();
+    out.ranges.push_back(r);
+    ++count;
+  }
+  out.ranges_per_anchor[anchor] += count;
+  out.files.push_back(file.name());
+}
+
+}  // namespace detail
+
+/// Reads every A<id>.csv of a case folder (at least one) and merges them in time order.
+inline HanyangUwbCase read_hanyang_uwb(const std::filesystem::path& case_dir) {
+  namespace fs = std::filesystem;
+  if (!fs::is_directory(case_dir)) throw ParseError(case_dir.string(), 0, 0, "", "not a folder");
+  std::vector<std::pair<int, fs::path>> files;
+  for (const auto& e : fs::directory_iterator(case_dir))
+    if (const int id = detail::anchor_of_file_name(e.path().filename().string()); e.is_regular_file() && id >= 0)
+      files.emplace_back(id, e.path());
+  if (files.empty()) throw ParseError(case_dir.string(), 0, 0, "", "no anchor range file A<id>.csv");
+  std::sort(files.begin(), files.end());
+  HanyangUwbCase out;
+  for (const auto& [id, path] : files) detail::read_hanyang_anchor_file(path, id, out);
+  std::stable_sort(out.ranges.begin(), out.ranges.end(), [](const HanyangRange& a, const HanyangRange& b) {
+    return a.t_ns != b.t_ns ? a.t_ns < b.t_ns : a.range.anchor_id < b.range.anchor_id;
+  });
+  return out;
+}
+
+/// Reads the case's trajectory.csv (timestamp [ns, written as a float], x, y, z [m],
+/// heading [deg]): the reference, on the ranges' clock.
+inline std::vector<HanyangReferencePose> read_hanyang_reference(const std::filesystem::path& case_dir) {
+  TextFile file(case_dir / "trajectory.csv");
+  Header header;
+  const auto c = detail::header_columns<5>(file, header, {"timestamp", "x", "y", "z", "heading_degrees"});
+  Fields f(file.name(), &header);
+  std::vector<HanyangReferencePose> out;
+  std::size_t previous_line = 0;
+  while (next_fields(file, f, Separator::comma)) {
+    f.expect_count(header.size());
+    HanyangReferencePose p;
+    p.t = f.real_in(c[0], 0.0, 1e19) * 1e-9;
+    if (!out.empty() && !(p.t > out.back().t))
+      f.fail(c[0], cat("time is not after the previous row's (line ", previous_line, ")"));
+    for (int k = 0; k < 3; ++k) p.position[k] = f.real_in(c[1 + static_cast<std::size_t>(k)], -1e5, 1e5);
+    p.heading_deg = f.real_in(c[4], -1e6, 1e6);
+    previous_line = file.line_number();
+    out.push_back(p);
+  }
+  return out;
+}
+
+}  // namespace ctxfuse::io
