@@ -6,9 +6,9 @@
 #include <ctxfuse/classify/svm_train.hpp>
 #include <ctxfuse/features/gnss_scene.hpp>
 #include <ctxfuse/features/nlos.hpp>
-#include <ctxfuse/features/nmea.hpp>
+#include <ctxfuse/io/nmea.hpp>
 #include <ctxfuse/features/scene_label.hpp>
-#include <ctxfuse/features/uwb_static.hpp>
+#include <ctxfuse/io/uwb_static.hpp>
 
 #include <cmath>
 #include <map>

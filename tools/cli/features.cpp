@@ -17,9 +17,9 @@
 
 #include <ctxfuse/features/gnss_scene.hpp>
 #include <ctxfuse/features/nlos.hpp>
-#include <ctxfuse/features/nmea.hpp>
+#include <ctxfuse/io/nmea.hpp>
 #include <ctxfuse/features/scene_label.hpp>
-#include <ctxfuse/features/uwb_static.hpp>
+#include <ctxfuse/io/uwb_static.hpp>
 
 #include "cli/registry.hpp"
 

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include <ctxfuse/features/gnss_scene.hpp>
-#include <ctxfuse/features/nmea.hpp>
+#include <ctxfuse/io/nmea.hpp>
 
 namespace ctxfuse::features {
 

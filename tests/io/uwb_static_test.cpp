@@ -1,7 +1,7 @@
 // Static UWB reader on small files written by the test: values, trailer, -inf rows, errors.
 #include <gtest/gtest.h>
 
-#include <ctxfuse/features/uwb_static.hpp>
+#include <ctxfuse/io/uwb_static.hpp>
 
 #include <filesystem>
 #include <fstream>
@@ -75,15 +75,16 @@ TEST_F(UwbStaticFiles, ErrorsNameFileLineAndColumn) {
     FAIL() << "expected UwbDataError";
   } catch (const UwbDataError& e) {
     const std::string what = e.what();
-    EXPECT_NE(what.find("10m.csv:3"), std::string::npos) << what;
-    EXPECT_NE(what.find("RSSI(dBm)"), std::string::npos) << what;
+    EXPECT_NE(what.find("10m.csv:3:13: column 'RSSI(dBm)': 'abc' is not a number"), std::string::npos) << what;
+    EXPECT_EQ(e.line(), 3u);
+    EXPECT_EQ(e.column(), 13u);
   }
   write("LOS/height_50.0cm/10m.csv", std::string(kHeader) + "1.0,2,3\n");
   try {
     read_uwb_static_dataset(root_, {}, stats);
     FAIL() << "expected UwbDataError";
   } catch (const UwbDataError& e) {
-    EXPECT_NE(std::string(e.what()).find("10m.csv:2: 3 fields, header has 21"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("10m.csv:2: 3 fields, expected 21 (as in the header)"), std::string::npos) << e.what();
   }
   write("LOS/height_50.0cm/10m.csv", "timestamp,Distance\n1,2\n");
   EXPECT_THROW(read_uwb_static_dataset(root_, {}, stats), UwbDataError);

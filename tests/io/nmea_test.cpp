@@ -1,7 +1,7 @@
 // NMEA reader: checksums, epoch assembly, multi-signal GSV, malformed sentences, distances.
 #include <gtest/gtest.h>
 
-#include <ctxfuse/features/nmea.hpp>
+#include <ctxfuse/io/nmea.hpp>
 #include <ctxfuse/features/scene_label.hpp>
 
 #include <cmath>
@@ -84,7 +84,9 @@ TEST(Nmea, AssemblesEpochsAndKeepsL1Signals) {
   ASSERT_EQ(parsed.stats.first_problems.size(), 2u);
   EXPECT_EQ(parsed.stats.first_problems[0].line, 9u);
   EXPECT_EQ(parsed.stats.first_problems[1].line, 10u);
-  EXPECT_NE(parsed.stats.first_problems[1].message.find("elevation"), std::string::npos);
+  EXPECT_EQ(parsed.stats.first_problems[0].column, 0u);  // a checksum is the sentence's
+  EXPECT_EQ(parsed.stats.first_problems[1].column, 6u);  // GPGSV,1,1,01,02,95: the sixth field
+  EXPECT_EQ(parsed.stats.first_problems[1].message, "GSV column 6 'elevation': '95' does not parse");
 }
 
 TEST(Nmea, GarbageNeverThrows) {

@@ -14,6 +14,8 @@
 //   skipped (counted); an empty SNR means "in view, not tracked" (NaN).
 #pragma once
 
+#include <ctxfuse/io/text.hpp>
+
 #include <charconv>
 #include <cmath>
 #include <cstddef>
@@ -22,7 +24,6 @@
 #include <limits>
 #include <numbers>
 #include <optional>
-#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <system_error>
@@ -64,6 +65,7 @@ struct NmeaEpoch {
 struct NmeaProblem {
   std::size_t line = 0;
   std::string message;
+  std::size_t column = 0;  // 1-based field of the sentence (1 = the address); 0 = the sentence as a whole
 };
 
 struct NmeaStats {
@@ -98,31 +100,9 @@ inline bool checksum_ok(std::string_view line) {
 
 namespace detail {
 
-inline std::vector<std::string_view> split_fields(std::string_view body) {
-  std::vector<std::string_view> out;
-  std::size_t start = 0;
-  while (true) {
-    const auto comma = body.find(',', start);
-    out.push_back(body.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start));
-    if (comma == std::string_view::npos) break;
-    start = comma + 1;
-  }
-  return out;
-}
-
-/// Parses a whole field as a finite double; false when empty or not a number.
-inline bool parse_double(std::string_view s, double& out) {
-  if (s.empty()) return false;
-  if (s.front() == '+') s.remove_prefix(1);
-  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
-  return ec == std::errc{} && p == s.data() + s.size() && std::isfinite(out);
-}
-
-inline bool parse_int(std::string_view s, int& out) {
-  if (s.empty()) return false;
-  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
-  return ec == std::errc{} && p == s.data() + s.size();
-}
+// The shared parsers of io/text.hpp, as yes/no: this reader counts problems instead of throwing.
+inline bool parse_double(std::string_view s, double& out) { return io::parse_real(s, out) == io::NumberError::none; }
+inline bool parse_int(std::string_view s, int& out) { return io::parse_integer(s, out) == io::NumberError::none; }
 
 /// hhmmss(.ss) -> seconds of day.
 inline bool parse_time_of_day(std::string_view s, double& out) {
@@ -177,11 +157,11 @@ class Reader {
       return;
     }
     const auto star = text.rfind('*');
-    const auto fields = split_fields(text.substr(1, star - 1));
+    const auto fields = io::split_fields(text.substr(1, star - 1), io::Separator::comma);
     const std::string_view address = fields[0];
     if (address.size() != 5) {
       ++log.stats.malformed;
-      problem("address field '" + std::string(address) + "' is not talker + 3-letter type");
+      problem(io::cat("address field ", io::quote(address), " is not talker + 3-letter type"), 1);
       return;
     }
     const std::string_view talker = address.substr(0, 2), type = address.substr(2);
@@ -213,12 +193,14 @@ class Reader {
   }
 
  private:
-  void problem(std::string message) {
+  void problem(std::string message, std::size_t column = 0) {
     if (log.stats.first_problems.size() < NmeaStats::kMaxProblems)
-      log.stats.first_problems.push_back({line_no_, std::move(message)});
+      log.stats.first_problems.push_back({line_no_, std::move(message), column});
   }
-  bool fail(std::string_view sentence, std::string_view field, std::string_view value) {
-    problem(std::string(sentence) + " field '" + std::string(field) + "': '" + std::string(value) + "' does not parse");
+  /// Field `index` of the sentence (0 = the address) did not parse; reported as the 1-based
+  /// column of the comma-separated sentence, as every reader of io/ numbers columns.
+  bool fail(std::string_view sentence, std::string_view field, const std::vector<std::string_view>& f, std::size_t index) {
+    problem(io::cat(sentence, " column ", index + 1, " '", field, "': ", io::quote(f[index]), " does not parse"), index + 1);
     return false;
   }
 
@@ -246,45 +228,45 @@ class Reader {
 
   bool timed(const std::vector<std::string_view>& f, std::size_t time_field, std::string_view name) {
     if (f.size() <= time_field) {
-      problem(std::string(name) + ": too few fields");
+      problem(io::cat(name, ": too few fields"));
       return false;
     }
     if (f[time_field].empty()) return true;  // no time yet (receiver cold start): nothing to learn
     double tod = 0;
-    if (!parse_time_of_day(f[time_field], tod)) return fail(name, "time", f[time_field]);
+    if (!parse_time_of_day(f[time_field], tod)) return fail(name, "time", f, time_field);
     epoch_for_time(tod);
     return true;
   }
 
   bool gga(const std::vector<std::string_view>& f) {
     if (f.size() < 10) {
-      problem("GGA: " + std::to_string(f.size()) + " fields, expected at least 10");
+      problem(io::cat("GGA: ", f.size(), " fields, expected at least 10"));
       return false;
     }
     GgaFix fix;
-    if (!parse_time_of_day(f[1], fix.time_of_day_s)) return fail("GGA", "time", f[1]);
-    if (!parse_int(f[6], fix.quality) || fix.quality < 0 || fix.quality > 9) return fail("GGA", "quality", f[6]);
+    if (!parse_time_of_day(f[1], fix.time_of_day_s)) return fail("GGA", "time", f, 1);
+    if (!parse_int(f[6], fix.quality) || fix.quality < 0 || fix.quality > 9) return fail("GGA", "quality", f, 6);
     if (fix.quality > 0) {
       if (!parse_angle(f[2], f[3], 2, fix.latitude_deg) || std::abs(fix.latitude_deg) > 90.0)
-        return fail("GGA", "latitude", f[2]);
+        return fail("GGA", "latitude", f, 2);
       if (!parse_angle(f[4], f[5], 3, fix.longitude_deg) || std::abs(fix.longitude_deg) > 180.0)
-        return fail("GGA", "longitude", f[4]);
-      if (!f[9].empty() && !parse_double(f[9], fix.altitude_m)) return fail("GGA", "altitude", f[9]);
+        return fail("GGA", "longitude", f, 4);
+      if (!f[9].empty() && !parse_double(f[9], fix.altitude_m)) return fail("GGA", "altitude", f, 9);
     }
-    if (!f[7].empty() && !parse_int(f[7], fix.satellites_used)) return fail("GGA", "satellites", f[7]);
-    if (!f[8].empty() && !parse_double(f[8], fix.hdop)) return fail("GGA", "hdop", f[8]);
+    if (!f[7].empty() && !parse_int(f[7], fix.satellites_used)) return fail("GGA", "satellites", f, 7);
+    if (!f[8].empty() && !parse_double(f[8], fix.hdop)) return fail("GGA", "hdop", f, 8);
     epoch_for_time(fix.time_of_day_s).gga = fix;
     return true;
   }
 
   bool gsa(const std::vector<std::string_view>& f) {
     if (f.size() < 18) {
-      problem("GSA: " + std::to_string(f.size()) + " fields, expected at least 18");
+      problem(io::cat("GSA: ", f.size(), " fields, expected at least 18"));
       return false;
     }
     if (f[15].empty()) return true;  // no fix: no DOP
     double pdop = 0;
-    if (!parse_double(f[15], pdop) || pdop <= 0.0) return fail("GSA", "pdop", f[15]);
+    if (!parse_double(f[15], pdop) || pdop <= 0.0) return fail("GSA", "pdop", f, 15);
     // All GSA sentences of an epoch repeat the combined PDOP; u-blox prints 99.99 without a fix.
     epoch_untimed().pdop = pdop >= 99.0 ? std::numeric_limits<double>::quiet_NaN() : pdop;
     return true;
@@ -297,39 +279,40 @@ class Reader {
     }
     const std::size_t rest = f.size() - 4;
     if (rest % 4 != 0 && rest % 4 != 1) {
-      problem("GSV: " + std::to_string(f.size()) + " fields do not form 4-field satellite groups");
+      problem(io::cat("GSV: ", f.size(), " fields do not form 4-field satellite groups"));
       return false;
     }
     int total = 0, number = 0, in_view = 0;
-    if (!parse_int(f[1], total)) return fail("GSV", "number of messages", f[1]);
-    if (!parse_int(f[2], number)) return fail("GSV", "message number", f[2]);
-    if (!parse_int(f[3], in_view)) return fail("GSV", "satellites in view", f[3]);
+    if (!parse_int(f[1], total)) return fail("GSV", "number of messages", f, 1);
+    if (!parse_int(f[2], number)) return fail("GSV", "message number", f, 2);
+    if (!parse_int(f[3], in_view)) return fail("GSV", "satellites in view", f, 3);
     const GnssSystem system = system_of_talker(talker);
     if (rest % 4 == 1) {
       unsigned signal = 0;
       const std::string_view s = f.back();
       const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), signal, 16);
-      if (s.size() != 1 || ec != std::errc{} || p != s.data() + s.size()) return fail("GSV", "signal id", s);
+      if (s.size() != 1 || ec != std::errc{} || p != s.data() + s.size()) return fail("GSV", "signal id", f, f.size() - 1);
       if (static_cast<int>(signal) != l1_signal_id(system)) return true;  // another band: same satellites again
     }
     // Parse all groups first so that a malformed sentence adds nothing.
     std::vector<NmeaSatellite> parsed;
     for (std::size_t g = 0; g < rest / 4; ++g) {
-      const auto id = f[4 + 4 * g], el = f[5 + 4 * g], az = f[6 + 4 * g], snr = f[7 + 4 * g];
+      const std::size_t c = 4 + 4 * g;  // the group's first field
+      const auto id = f[c], el = f[c + 1], az = f[c + 2], snr = f[c + 3];
       if (id.empty()) continue;  // padding group
       NmeaSatellite sat;
       sat.system = system;
-      if (!parse_int(id, sat.prn) || sat.prn <= 0) return fail("GSV", "satellite id", id);
+      if (!parse_int(id, sat.prn) || sat.prn <= 0) return fail("GSV", "satellite id", f, c);
       if (el.empty() || az.empty()) {
         ++log.stats.satellites_without_geometry;
         continue;
       }
       if (!parse_double(el, sat.elevation_deg) || std::abs(sat.elevation_deg) > 90.0)
-        return fail("GSV", "elevation", el);
+        return fail("GSV", "elevation", f, c + 1);
       if (!parse_double(az, sat.azimuth_deg) || sat.azimuth_deg < 0.0 || sat.azimuth_deg > 360.0)
-        return fail("GSV", "azimuth", az);
+        return fail("GSV", "azimuth", f, c + 2);
       if (!snr.empty() && (!parse_double(snr, sat.snr_dbhz) || sat.snr_dbhz < 0.0 || sat.snr_dbhz > 99.0))
-        return fail("GSV", "snr", snr);
+        return fail("GSV", "snr", f, c + 3);
       parsed.push_back(sat);
     }
     auto& sats = epoch_untimed().satellites;
@@ -362,10 +345,11 @@ inline NmeaLog parse_nmea(std::istream& in) {
   return reader.finish();
 }
 
-/// Reads a file; throws std::runtime_error naming the file when it cannot be opened.
+/// Reads a file; throws io::ParseError (a std::runtime_error) naming the file when it cannot
+/// be opened.
 inline NmeaLog read_nmea_file(const std::string& path) {
   std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot open NMEA file '" + path + "'");
+  if (!in) throw io::ParseError(path, 0, 0, "", "cannot open NMEA file");
   return parse_nmea(in);
 }
 

@@ -9,37 +9,24 @@
 // - Rows whose RSSI or first-path RSSI is -inf/inf/nan (the chip reports -inf when a power
 //   computation fails) are skipped and counted, not treated as errors.
 // - Anything else that does not parse (wrong number of fields, a non-number in a used column,
-//   a negative or absurd distance) throws UwbDataError naming file, line and column.
+//   a negative or absurd distance) throws io::ParseError (alias UwbDataError) naming file,
+//   line and column (file:line:column: column 'name': ...).
 #pragma once
 
+#include <ctxfuse/io/text.hpp>
+
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
-#include <stdexcept>
+#include <limits>
 #include <string>
 #include <string_view>
-#include <system_error>
 #include <vector>
 
 namespace ctxfuse::features {
 
-class UwbDataError : public std::runtime_error {
- public:
-  UwbDataError(const std::string& file, std::size_t line, const std::string& field, const std::string& what)
-      : std::runtime_error(message(file, line, field, what)) {}
-
- private:
-  // Appended piece by piece: g++ 12 warns (-Wrestrict, a false positive) on the inlined
-  // `"literal" + std::string&&` that a single concatenation expression produces.
-  static std::string message(const std::string& file, std::size_t line, const std::string& field, const std::string& what) {
-    std::string m = file;
-    if (line > 0) m.append(":").append(std::to_string(line));
-    if (!field.empty()) m.append(": column '").append(field).append("'");
-    return m.append(": ").append(what);
-  }
-};
+/// Kept for the users of this reader's first version: its errors are the io readers' ones.
+using UwbDataError = io::ParseError;
 
 struct UwbStaticRange {
   double true_distance_m = 0.0;
@@ -62,27 +49,18 @@ struct UwbStaticReadStats {
 
 namespace detail {
 
+// The CLI's feature commands (tools/cli/features.cpp) read their CSVs with these two names
+// from this reader's first version; they are the io/text.hpp splitter and parser.
 inline std::vector<std::string_view> split_csv_line(std::string_view line) {
-  std::vector<std::string_view> out;
-  std::size_t start = 0;
-  while (true) {
-    const auto comma = line.find(',', start);
-    std::string_view f = line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start);
-    while (!f.empty() && (f.front() == ' ' || f.front() == '\t')) f.remove_prefix(1);
-    while (!f.empty() && (f.back() == ' ' || f.back() == '\t' || f.back() == '\r')) f.remove_suffix(1);
-    out.push_back(f);
-    if (comma == std::string_view::npos) break;
-    start = comma + 1;
-  }
-  return out;
+  return io::split_fields(line, io::Separator::comma);
 }
 
-/// Whole-field double parse accepting inf/-inf/nan spellings (from_chars does).
+/// Whole-field double, inf/-inf/nan spellings accepted, no magnitude bound.
 inline bool parse_field(std::string_view s, double& out) {
-  if (s.empty()) return false;
-  if (s.front() == '+') s.remove_prefix(1);
-  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
-  return ec == std::errc{} && p == s.data() + s.size();
+  io::RealRules any;
+  any.allow_non_finite = true;
+  any.max_abs = std::numeric_limits<double>::max();
+  return io::parse_real(s, out, any) == io::NumberError::none;
 }
 
 /// Leading number of a name such as "58m.csv" or "height_62.5cm"; NaN when absent.
@@ -92,7 +70,7 @@ inline double number_in_name(std::string_view name, std::string_view prefix, std
     return std::nan("");
   double v = 0.0;
   const auto body = name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
-  return parse_field(body, v) && std::isfinite(v) ? v : std::nan("");
+  return io::parse_real(body, v) == io::NumberError::none ? v : std::nan("");
 }
 
 }  // namespace detail
@@ -100,46 +78,32 @@ inline double number_in_name(std::string_view name, std::string_view prefix, std
 /// Reads one recording. `true_distance_m`, `nlos` and `height_cm` label every range.
 inline std::vector<UwbStaticRange> read_uwb_static_file(const std::filesystem::path& path, double true_distance_m,
                                                         bool nlos, double height_cm, UwbStaticReadStats& stats) {
-  const std::string file = path.string();
-  std::ifstream in(path);
-  if (!in) throw UwbDataError(file, 0, "", "cannot open file");
-  std::string line;
-  std::size_t line_no = 0;
-  if (!std::getline(in, line)) throw UwbDataError(file, 1, "", "empty file (no header)");
-  ++line_no;
-  const auto header = detail::split_csv_line(line);
-  auto column = [&](std::string_view name) -> std::size_t {
-    const auto it = std::find(header.begin(), header.end(), name);
-    if (it == header.end()) throw UwbDataError(file, 1, std::string(name), "column missing from the header");
-    return static_cast<std::size_t>(it - header.begin());
+  io::TextFile file(path);
+  std::string_view line;
+  if (!file.next(line)) throw io::ParseError(file.name(), 1, 0, "", "empty file (no header)");
+  const io::Header header(io::split_fields(line, io::Separator::comma));
+  auto column = [&](std::string_view name) {
+    const auto c = header.find(name);
+    if (!c) throw io::ParseError(file.name(), 1, 0, std::string(name), "column missing from the header");
+    return *c;
   };
   const std::size_t c_dist = column("Distance"), c_rssi = column("RSSI(dBm)"), c_fp = column("RSSI_fp(dBm)");
-  const std::vector<std::string> names(header.begin(), header.end());  // header views die with `line`
+  io::Fields f(file.name(), &header);
+  io::RealRules power;  // the chip writes -inf when a power estimate fails
+  power.allow_non_finite = true;
   std::vector<UwbStaticRange> out;
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (line.empty() || line == "\r") continue;
-    const auto fields = detail::split_csv_line(line);
+  while (io::next_fields(file, f, io::Separator::comma)) {
     double first = 0.0;
-    if (!detail::parse_field(fields[0], first)) break;  // summary block
-    if (fields.size() != names.size())
-      throw UwbDataError(file, line_no, "", std::to_string(fields.size()) + " fields, header has " +
-                                                std::to_string(names.size()));
+    if (io::parse_real(f[0], first, power) != io::NumberError::none) break;  // summary block
+    f.expect_count(header.size());
     UwbStaticRange r;
     r.true_distance_m = true_distance_m;
     r.nlos = nlos;
     r.height_cm = height_cm;
     r.file_index = stats.files;
-    auto get = [&](std::size_t c, double& v) {
-      if (!detail::parse_field(fields[c], v))
-        throw UwbDataError(file, line_no, names[c], "'" + std::string(fields[c]) + "' is not a number");
-    };
-    get(c_dist, r.measured_distance_m);
-    get(c_rssi, r.rssi_dbm);
-    get(c_fp, r.first_path_rssi_dbm);
-    if (!std::isfinite(r.measured_distance_m) || r.measured_distance_m < 0.0 || r.measured_distance_m > 1000.0)
-      throw UwbDataError(file, line_no, names[c_dist],
-                         "distance " + std::string(fields[c_dist]) + " outside [0, 1000] m");
+    r.measured_distance_m = f.real_in(c_dist, 0.0, 1000.0);
+    r.rssi_dbm = f.real(c_rssi, power);
+    r.first_path_rssi_dbm = f.real(c_fp, power);
     if (!std::isfinite(r.rssi_dbm) || !std::isfinite(r.first_path_rssi_dbm)) {
       ++stats.skipped_non_finite_power;
       continue;
@@ -161,7 +125,7 @@ inline std::vector<UwbStaticRange> read_uwb_static_dataset(const std::filesystem
   std::vector<UwbStaticRange> out;
   for (const bool nlos : {false, true}) {
     const fs::path dir = root / (nlos ? "NLOS" : "LOS");
-    if (!fs::is_directory(dir)) throw UwbDataError(dir.string(), 0, "", "folder missing");
+    if (!fs::is_directory(dir)) throw io::ParseError(dir.string(), 0, 0, "", "folder missing");
     std::vector<fs::path> files;
     for (const auto& h : fs::directory_iterator(dir)) {
       if (!h.is_directory()) continue;
@@ -176,7 +140,8 @@ inline std::vector<UwbStaticRange> read_uwb_static_dataset(const std::filesystem
     std::sort(files.begin(), files.end());
     for (const auto& f : files) {
       const double d = detail::number_in_name(f.filename().string(), "", "m.csv");
-      if (std::isnan(d) || d <= 0.0) throw UwbDataError(f.string(), 0, "", "file name does not give the distance as <d>m.csv");
+      if (std::isnan(d) || d <= 0.0)
+        throw io::ParseError(f.string(), 0, 0, "", "file name does not give the distance as <d>m.csv");
       const double height = detail::number_in_name(f.parent_path().filename().string(), "height_", "cm");
       auto ranges = read_uwb_static_file(f, d, nlos, height, stats);
       out.insert(out.end(), ranges.begin(), ranges.end());
