@@ -10,6 +10,7 @@ CTXFUSE_DEBIAN_PACKAGES=(
   cmake ninja-build g++ clang
   libeigen3-dev libboost-dev libgtest-dev libbenchmark-dev
   libsvm-dev libsvm-tools libceres-dev gnuplot-nox
+  libcli11-dev nlohmann-json3-dev
 )
 
 ctxfuse_missing_packages() {
