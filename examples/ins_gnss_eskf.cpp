@@ -51,7 +51,8 @@ int main(int argc, char** argv) {
     for (; next_fix < drive.gnss.size() && drive.gnss[next_fix].t <= s.t; ++next_fix) {
       const sim::GnssEpoch& e = drive.gnss[next_fix];
       if (!e.has_fix || e.t <= filter.time()) continue;
-      (void)filter.predict_to(e.t, models::ImuSample{s.gyro, s.accel});
+      // A fix is applied at its own epoch only: if the prediction to it is refused, skip it.
+      if (!filter.predict_to(e.t, models::ImuSample{s.gyro, s.accel})) continue;
       models::GnssPosition<> fix;
       fix.R = Vector<3>(e.std_horizontal_m * e.std_horizontal_m, e.std_horizontal_m * e.std_horizontal_m,
                         e.std_vertical_m * e.std_vertical_m).asDiagonal();

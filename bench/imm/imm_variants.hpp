@@ -49,7 +49,7 @@ inline auto make_imm(const Setup& s) {
 /// stops the compiler from discarding a result.
 template <class Imm, class Keep>
 void imm_step(Imm& f, const Setup& s, double& t, Keep&& keep) {
-  f.mix();
+  keep(f.mix());
   keep(f.predict(s.u, 0.01));
   t += 0.01;
   keep(f.update(GnssTag{}, s.gnss, Vector<3>(0.05 * t, 0.0, 0.0)));

@@ -179,7 +179,7 @@ TEST_F(EskfFixture, RejectsBadFixesAndLeavesStateUnchanged) {
 }
 
 TEST(BadInput, DescribeNamesEveryProblem) {
-  for (int p = 0; p <= static_cast<int>(Problem::covariance_not_positive_definite); ++p)
+  for (int p = 0; p <= static_cast<int>(last_problem); ++p)
     EXPECT_NE(describe(static_cast<Problem>(p)), "unknown") << p;
 }
 

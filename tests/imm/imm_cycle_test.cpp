@@ -206,13 +206,13 @@ TEST(ImmBehaviour, FarOutlierDoesNotZeroEveryMode) {
   meas.H << 1.0, 0.0;
   meas.R << 0.09;
   for (int k = 1; k <= 5; ++k) {
-    f.mix();
-    f.predict({}, 1.0);
+    ASSERT_TRUE(f.mix());
+    ASSERT_TRUE(f.predict({}, 1.0));
     f.update(AnyTag{}, meas, Vector<1>(double(k)));
     f.update_mode_probabilities();
   }
-  f.mix();
-  f.predict({}, 1.0);
+  ASSERT_TRUE(f.mix());
+  ASSERT_TRUE(f.predict({}, 1.0));
   // Each mode's likelihood is exp(-1e11) or so: zero in double precision for all of them.
   const auto res = f.update(AnyTag{}, meas, Vector<1>(1e6));
   ASSERT_TRUE(res.scored);
@@ -250,7 +250,7 @@ TEST(ImmBehaviour, TotalRejectionKeepsPredictedProbabilities) {
   // c_j = sum_i p_ij mu_i by hand: 0.9*0.6+0.05*0.3+0.05*0.1 = 0.56, ...
   EXPECT_NEAR(c(0), 0.56, 1e-15);
   EXPECT_NEAR(c(1), 0.05 * 0.6 + 0.9 * 0.3 + 0.05 * 0.1, 1e-15);
-  f.predict({}, 1.0);
+  ASSERT_TRUE(f.predict({}, 1.0));
   const auto before = f.mode_belief<1>();
   const auto res = f.update(AnyTag{}, meas, Vector<1>(500.0));
   EXPECT_EQ(res.accepted_count, 0);
@@ -276,8 +276,8 @@ TEST(ImmRouting, OnlyTakersAreCorrectedButEveryModeIsScored) {
   Meas meas;
   meas.H << 1.0, 0.0;
   meas.R << 0.09;
-  f.mix();
-  f.predict({}, 1.0);
+  ASSERT_TRUE(f.mix());
+  ASSERT_TRUE(f.predict({}, 1.0));
   const auto b2 = f.mode_belief<2>();
   auto res = f.update(GnssTag{}, meas, Vector<1>(0.5));
   EXPECT_TRUE(res.taken[0]);
@@ -310,8 +310,8 @@ TEST(ImmRouting, InvalidMeasurementChangesNothing) {
   Meas meas;
   meas.H << 1.0, 0.0;
   meas.R << 0.09;
-  f.mix();
-  f.predict({}, 1.0);
+  ASSERT_TRUE(f.mix());
+  ASSERT_TRUE(f.predict({}, 1.0));
   const auto b0 = f.mode_belief<0>();
   const auto res = f.update(AnyTag{}, meas, Vector<1>(std::numeric_limits<double>::quiet_NaN()));
   EXPECT_EQ(res.problem, Problem::non_finite_measurement);
@@ -329,8 +329,8 @@ TEST(ImmBehaviour, FloorKeepsEveryModeAlive) {
   meas.H << 1.0, 0.0;
   meas.R << 0.01;
   for (int k = 1; k <= 30; ++k) {
-    f.mix();
-    f.predict({}, 1.0);
+    ASSERT_TRUE(f.mix());
+    ASSERT_TRUE(f.predict({}, 1.0));
     f.update(AnyTag{}, meas, Vector<1>(double(k)));
     f.update_mode_probabilities();
     EXPECT_GE(f.mode_probabilities().minCoeff(), 1e-4 - 1e-16);

@@ -88,10 +88,10 @@ TEST(RegionAdaptive, ReducesToTheFixedMatrixWhenRecognisedWeightIsZero) {
   for (int k = 0; k < 8; ++k) {
     adaptive.mixing().observe_region(labels[k]);
     EXPECT_EQ(adaptive.mixing().matrix(), asymmetric_prior());
-    fixed.mix();
-    adaptive.mix();
-    fixed.predict({}, 1.0);
-    adaptive.predict({}, 1.0);
+    ASSERT_TRUE(fixed.mix());
+    ASSERT_TRUE(adaptive.mix());
+    ASSERT_TRUE(fixed.predict({}, 1.0));
+    ASSERT_TRUE(adaptive.predict({}, 1.0));
     fixed.update(Tag{}, meas, Vector<1>(0.7 * k));
     adaptive.update(Tag{}, meas, Vector<1>(0.7 * k));
     fixed.update_mode_probabilities();
@@ -122,6 +122,13 @@ Eigen::Matrix3d random_spd(int seed) {
   return A * A.transpose() + 0.5 * Eigen::Matrix3d::Identity();
 }
 
+// x+ = x with process noise q I.
+models::LinearProcess<3> identity_process(double q) {
+  models::LinearProcess<3> lin;
+  lin.Q = q * SquareMatrix<3>::Identity();
+  return lin;
+}
+
 TEST(Federated, FusionMatchesInformationForm) {
   std::array<Gaussian<3>, 3> locals;
   for (int i = 0; i < 3; ++i) {
@@ -146,13 +153,44 @@ TEST(Federated, FusionMatchesInformationForm) {
   // Not positive definite: refused, output untouched.
   locals[1].cov(0, 0) = -1.0;
   Gaussian<3> untouched;
-  EXPECT_FALSE(fkf::fuse(lin, locals, untouched));
+  const Status refused = fkf::fuse(lin, locals, untouched);
+  EXPECT_EQ(refused.outcome, Outcome::numerical_failure);
+  EXPECT_EQ(refused.problem, Problem::covariance_not_positive_definite);
   EXPECT_EQ(untouched.mean, Vector<3>::Zero());
 }
 
+TEST(Federated, OperationsReportThroughStatus) {
+  const models::LinearProcess<3> lin = identity_process(0.1);
+  Gaussian<3> init;
+  init.cov = random_spd(5);
+  fkf::FederatedFilter<models::LinearProcess<3>, 2> f(lin, init, {0.5, 0.5});
+  models::LinearMeasurement<1, 3> meas;
+  meas.H << 1.0, 0.0, 0.0;
+  // A local filter that does not exist has its own problem, not the measurement's.
+  for (int bad : {-1, 2}) {
+    const Status s = f.update(bad, meas, Vector<1>(0.3));
+    EXPECT_EQ(s.outcome, Outcome::invalid_input) << bad;
+    EXPECT_EQ(s.problem, Problem::local_filter_index_out_of_range) << bad;
+  }
+  EXPECT_EQ(f.local(0).mean, init.mean);
+  EXPECT_EQ(f.local(1).mean, init.mean);
+  ASSERT_TRUE(f.update(1, meas, Vector<1>(0.3)));
+  EXPECT_NE(f.local(1).mean, init.mean);
+  ASSERT_TRUE(f.fuse_and_reset());
+
+  // Locals that are not positive definite (the constructor takes the initial belief as it
+  // is): the fusion is refused with a status and the global estimate is kept.
+  Gaussian<3> indefinite = init;
+  indefinite.cov(0, 0) = -1.0;
+  fkf::FederatedFilter<models::LinearProcess<3>, 2> g(lin, indefinite, {0.5, 0.5});
+  const Status refused = g.fuse_and_reset();
+  EXPECT_EQ(refused.outcome, Outcome::numerical_failure);
+  EXPECT_EQ(refused.problem, Problem::covariance_not_positive_definite);
+  EXPECT_EQ(g.global().cov, indefinite.cov);
+}
+
 TEST(Federated, ResetSharesInformationByBeta) {
-  models::LinearProcess<3> lin;
-  lin.Q = 0.1 * SquareMatrix<3>::Identity();
+  const models::LinearProcess<3> lin = identity_process(0.1);
   Gaussian<3> init;
   init.cov = random_spd(4);
   fkf::FederatedFilter<models::LinearProcess<3>, 2> f(lin, init, {0.25, 0.75});

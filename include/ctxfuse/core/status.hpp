@@ -1,6 +1,8 @@
 // Result of a filter step. A step either commits (accepted) or leaves the estimate exactly as
 // it was, and says why: gated by the innovation test, invalid input (which one), or a numerical
 // failure. Errors are values, never asserts or exits: an estimator in a vehicle must keep going.
+// Status is [[nodiscard]]: a step that was refused and whose status nobody read is the silent
+// failure this type exists to prevent. A caller that may ignore one says why where it does.
 #pragma once
 
 #include <cstdint>
@@ -36,8 +38,18 @@ enum class Problem : std::uint8_t {
   innovation_not_positive_definite,
   non_finite_covariance,
   non_finite_state,
-  covariance_not_positive_definite,  // a caller-supplied covariance (e.g. a reset) is not
+  covariance_not_positive_definite,  // a covariance that must be is not: a caller-supplied one
+                                     // (e.g. a reset; invalid input) or a filter's own (fusion;
+                                     // numerical failure)
+  // Filters made of several filters (filters/imm.hpp, filters/federated.hpp).
+  imm_cycle_not_closed,              // mix() again before update_mode_probabilities()
+  transition_matrix_not_stochastic,  // the mixing policy's matrix: negative, NaN or a row sum != 1
+  mode_probabilities_vanished,       // c_j = sum_i p_ij mu_i not finite or zero for every j
+  local_filter_index_out_of_range,   // a federated filter's local filter index
 };
+
+/// The last Problem, for code that walks them all (keep it the last enumerator above).
+inline constexpr Problem last_problem = Problem::local_filter_index_out_of_range;
 
 constexpr std::string_view describe(Problem p) {
   switch (p) {
@@ -61,6 +73,10 @@ constexpr std::string_view describe(Problem p) {
     case Problem::non_finite_covariance: return "updated covariance contains NaN or Inf";
     case Problem::non_finite_state: return "updated state contains NaN or Inf";
     case Problem::covariance_not_positive_definite: return "covariance is not positive definite";
+    case Problem::imm_cycle_not_closed: return "IMM cycle not closed: mix() called again before update_mode_probabilities()";
+    case Problem::transition_matrix_not_stochastic: return "mode transition matrix is not row-stochastic";
+    case Problem::mode_probabilities_vanished: return "predicted mode probabilities are not finite or all zero";
+    case Problem::local_filter_index_out_of_range: return "local filter index out of range";
   }
   return "unknown";
 }
@@ -75,7 +91,7 @@ constexpr std::string_view describe(Outcome o) {
   return "unknown";
 }
 
-struct Status {
+struct [[nodiscard]] Status {
   Outcome outcome = Outcome::accepted;
   Problem problem = Problem::none;
   int dof = 0;  // measurement dimension for updates, 0 for predictions

@@ -13,6 +13,9 @@
 // x_g = x_0 [+] P_g sum_i P_i^-1 (x_i [-] x_0), which is the formula above for plain vectors.
 // Nothing allocates; fusion uses Cholesky solves, and a covariance that is not positive
 // definite fails the fusion (status, nothing changed).
+// Failures: the operations report a Status like every other filter (nothing changed when not
+// accepted); only the constructor throws (std::invalid_argument), for sharing factors beta_i
+// that are not > 0 or do not sum to 1, a configuration error no step could recover from.
 #pragma once
 
 #include <Eigen/Cholesky>
@@ -47,31 +50,34 @@ struct SharedProcess {
 }  // namespace detail
 
 /// Information-form fusion of L Gaussian estimates (Model only for the angle-aware
-/// difference/inject). Returns false, leaving `out` untouched, when a covariance is not
-/// positive definite.
+/// difference/inject). Leaves `out` untouched unless accepted: a local or the fused
+/// information that is not positive definite is covariance_not_positive_definite, a fused
+/// result that is not finite non_finite_covariance or non_finite_state (numerical failures:
+/// the locals are the filter's own).
 template <class Model, int N, std::size_t L>
-bool fuse(const Model& model, const std::array<Gaussian<N>, L>& locals, Gaussian<N>& out) {
+Status fuse(const Model& model, const std::array<Gaussian<N>, L>& locals, Gaussian<N>& out) {
   static_assert(L >= 1);
   SquareMatrix<N> info = SquareMatrix<N>::Zero();
   Vector<N> info_state = Vector<N>::Zero();
   const Vector<N>& ref = locals[0].mean;
   for (const auto& b : locals) {
     Eigen::LLT<SquareMatrix<N>> llt(b.cov);
-    if (llt.info() != Eigen::Success) return false;
+    if (llt.info() != Eigen::Success) return Status::failure(Problem::covariance_not_positive_definite);
     const SquareMatrix<N> Pinv = llt.solve(SquareMatrix<N>::Identity());
     info += Pinv;
     info_state += Pinv * state_difference(model, b.mean, ref);
   }
   symmetrize(info);
   Eigen::LLT<SquareMatrix<N>> llt(info);
-  if (llt.info() != Eigen::Success) return false;
+  if (llt.info() != Eigen::Success) return Status::failure(Problem::covariance_not_positive_definite);
   SquareMatrix<N> Pg = llt.solve(SquareMatrix<N>::Identity());
   symmetrize(Pg);
   const Vector<N> dx = llt.solve(info_state);
-  if (!Pg.allFinite() || !dx.allFinite()) return false;
+  if (!Pg.allFinite()) return Status::failure(Problem::non_finite_covariance);
+  if (!dx.allFinite()) return Status::failure(Problem::non_finite_state);
   out.mean = state_inject(model, ref, dx);
   out.cov = Pg;
-  return true;
+  return Status{};
 }
 
 /// L local EKFs and the master fusion with reset.
@@ -97,6 +103,7 @@ class FederatedFilter {
   }
 
   const Belief& global() const { return global_; }
+  /// Local filter i's belief; i must be in [0, L) (an accessor has no status to report with).
   const Belief& local(int i) const { return locals_[static_cast<std::size_t>(i)]; }
   const std::array<double, L>& beta() const { return beta_; }
 
@@ -112,10 +119,10 @@ class FederatedFilter {
     return Status{};
   }
 
-  /// Corrects local filter `i` only.
+  /// Corrects local filter `i` only; an i outside [0, L) is local_filter_index_out_of_range.
   template <class Meas>
   Status update(int i, const Meas& meas, const Vector<Meas::dim>& z) {
-    if (i < 0 || i >= L) return Status::invalid(Problem::measurement_out_of_domain);
+    if (i < 0 || i >= L) return Status::invalid(Problem::local_filter_index_out_of_range);
     return ekf::update<N>(meas, locals_[static_cast<std::size_t>(i)], z, gate_, options_);
   }
 
@@ -131,14 +138,14 @@ class FederatedFilter {
     return Status{};
   }
 
-  /// Fuses the local estimates into the global one and resets the locals from it. Returns
-  /// false (nothing changed) when a covariance is not positive definite.
-  bool fuse_and_reset() {
+  /// Fuses the local estimates into the global one and resets the locals from it; nothing
+  /// changes unless accepted (the failures of fuse()).
+  Status fuse_and_reset() {
     Belief g;
-    if (!fuse(model_, locals_, g)) return false;
+    if (Status s = fuse(model_, locals_, g); !s.accepted()) return s;
     global_ = g;
     reset_locals();
-    return true;
+    return Status{};
   }
 
  private:

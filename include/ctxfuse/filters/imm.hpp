@@ -8,12 +8,20 @@
 // 1 Hz, UWB at 10 Hz) can run it:
 //   mix()                      c_j = sum_i p_ij mu_i, mu_{i|j} = p_ij mu_i / c_j, mixed
 //                              means/covariances with the spread of means; opens the cycle.
+//                              Refused (Problem::imm_cycle_not_closed, nothing changed) while
+//                              the previous cycle is open: mixing again without the close would
+//                              keep mu at its old value forever, silently.
 //   predict(u, dt)  (any number of times) mode-matched prediction.
 //   update(tag, meas, z, mask) (any number of times) mode-matched corrections; every mode is
 //                              scored on the measurement (see "Routing") and the log-likelihoods
 //                              of the cycle accumulate per mode.
 //   update_mode_probabilities() mu_j ∝ Lambda_j c_j in the log domain, floor, closes the cycle.
-//   combined()                 x = sum mu_j x_j, P = sum mu_j (P_j + spread).
+//   combined()                 x = sum mu_j x_j, P = sum mu_j (P_j + spread); while a cycle
+//                              is open the weights are ImmOptions::prior_weights' (the textbook
+//                              c_j or the last closed cycle's mu_j: see PriorWeights).
+// cycle(u, dt, observe(tag, meas, z, mask)...) runs the common cycle (mix, one predict, the
+// updates in order, the close) in one call; the split steps stay for multi-rate systems.
+// mixing_weights() and predicted_probabilities() read the last mix()'s mu_{i|j} and c_j.
 // The transition matrix comes from a MixingPolicy (policies/mixing.hpp), asked once per mix():
 // its entries are per cycle, not per second, so a caller that mixes at every measurement epoch
 // chooses p_ij for that epoch spacing.
@@ -48,6 +56,8 @@
 // textbook formula exactly (the reference cancels).
 //
 // No step allocates: beliefs are fixed-size and live inside the object.
+// Also read: imm_modes.hpp (Mode, Accepts, belief storage), imm_types.hpp (ImmOptions and
+// PriorWeights, UpdateResult, CycleResult, observe), imm_moments.hpp (the weighted sums).
 #pragma once
 
 #include <boost/hana.hpp>
@@ -65,88 +75,14 @@
 #include "ctxfuse/core/validation.hpp"
 #include "ctxfuse/filters/ekf.hpp"
 #include "ctxfuse/filters/eskf.hpp"
+#include "ctxfuse/filters/imm_modes.hpp"
+#include "ctxfuse/filters/imm_moments.hpp"
+#include "ctxfuse/filters/imm_types.hpp"
 #include "ctxfuse/policies/gating.hpp"
 
 namespace ctxfuse::imm {
 
 namespace hana = boost::hana;
-
-/// Measurement tags a mode takes; `AcceptsAll` takes every tag.
-template <class... Tags>
-struct Accepts {
-  template <class Tag>
-  static constexpr bool contains = (std::is_same_v<Tag, Tags> || ...);
-};
-struct AcceptsAll {
-  template <class Tag>
-  static constexpr bool contains = true;
-};
-
-/// One mode of the IMM: a process model (its own process noise), the tags it takes, a gate.
-template <ProcessModel Model, class Taken = AcceptsAll, GatePolicy Gate = NoGate>
-struct Mode {
-  using ProcessModelType = Model;
-  using TakenTags = Taken;
-  using GateType = Gate;
-  Model model{};
-  Gate gate{};
-};
-
-template <class Model, class Taken = AcceptsAll, class Gate = NoGate>
-Mode<Model, Taken, Gate> make_mode(Model model, Taken = {}, Gate gate = {}) {
-  return {std::move(model), std::move(gate)};
-}
-
-namespace detail {
-
-template <class Model>
-inline constexpr bool is_error_state = ErrorStateProcessModel<Model> && !VectorProcessModel<Model>;
-
-/// Belief storage of a mode: Gaussian for vector states, nominal + error covariance otherwise.
-template <class Model, bool ErrorState = is_error_state<Model>>
-struct BeliefSelect {
-  using type = Gaussian<Model::dim>;
-};
-template <class Model>
-struct BeliefSelect<Model, true> {
-  using type = ErrorStateBelief<typename Model::State, Model::dim>;
-};
-template <class Model>
-using BeliefOf = typename BeliefSelect<Model>::type;
-
-template <class B>
-auto& point(B& b) {
-  if constexpr (requires { b.nominal; })
-    return b.nominal;
-  else
-    return b.mean;
-}
-
-template <class T>
-constexpr bool is_hana_tuple() {
-  return hana::is_a<hana::tuple_tag, T>;
-}
-
-}  // namespace detail
-
-/// What one IMM update did, per mode and overall.
-template <int R>
-struct UpdateResult {
-  std::array<Status, R> mode{};   // status of each mode's correction (or scoring, when not taken)
-  std::array<bool, R> taken{};    // whether the mode took (was offered) the measurement
-  int taken_count = 0;
-  int accepted_count = 0;         // modes that took it and were corrected
-  bool scored = false;            // the likelihoods entered the mode probabilities
-  Problem problem = Problem::none;  // invalid input common to all modes, if any
-
-  bool any_accepted() const { return accepted_count > 0; }
-};
-
-template <int R>
-struct ImmOptions {
-  double probability_floor = 1e-6;  // each mu_j is kept >= this (then renormalised)
-  FilterOptions filter{};
-};
 
 template <class Mixing, class... Modes>
 class Imm {
@@ -174,12 +110,23 @@ class Imm {
     const double s = mu_.sum();
     mu_ = s > 0.0 ? Probabilities(mu_ / s) : Probabilities::Constant(1.0 / R);
     c_ = mu_;
+    w_.setIdentity();  // no mixing yet: every mode is its own
     log_lik_.setZero();
   }
 
   const Probabilities& mode_probabilities() const { return mu_; }
-  /// c_j of the open cycle (predicted mode probabilities).
+  /// c_j of the open cycle (predicted mode probabilities); mu_j once the cycle is closed.
   const Probabilities& predicted_probabilities() const { return c_; }
+  /// The last mix()'s mixing weights: entry (i, j) is mu_{i|j} = p_ij mu_i / c_j, the share of
+  /// mode i in mode j's mixed prior, so every column sums to 1. Identity before the first mix().
+  const TransitionMatrix& mixing_weights() const { return w_; }
+  /// Whether mix() has opened a cycle that update_mode_probabilities() has not closed yet.
+  bool cycle_open() const { return cycle_open_; }
+  /// The weights combined() uses now: c_j or mu_j while a cycle is open (ImmOptions::
+  /// prior_weights), mu_j once it is closed (then c_j = mu_j).
+  const Probabilities& combination_weights() const {
+    return options_.prior_weights == PriorWeights::predicted ? c_ : mu_;
+  }
   /// Accumulated log-likelihood per mode in the open cycle.
   const Probabilities& cycle_log_likelihood() const { return log_lik_; }
   /// Mode J's belief. The reference refers to one of two buffers that the steps alternate
@@ -200,26 +147,27 @@ class Imm {
     return best;
   }
 
-  /// Interaction/mixing step with the policy's current transition matrix. Returns false (and
-  /// changes nothing) when the matrix is not row-stochastic or c_j vanishes for every j.
-  bool mix() {
+  /// Interaction/mixing step with the policy's current transition matrix; opens a cycle.
+  /// Refused, changing nothing: while the previous cycle is open (imm_cycle_not_closed), when
+  /// the matrix is not row-stochastic (transition_matrix_not_stochastic, invalid input) or when
+  /// c_j is not finite or zero for every j (mode_probabilities_vanished, numerical failure).
+  Status mix() {
+    if (cycle_open_) return Status::invalid(Problem::imm_cycle_not_closed);
     const TransitionMatrix P = mixing_.matrix();
-    if (!is_row_stochastic(P)) return false;
+    if (!is_row_stochastic(P)) return Status::invalid(Problem::transition_matrix_not_stochastic);
     const Probabilities c = P.transpose() * mu_;
-    if (!c.allFinite() || !(c.sum() > 0.0)) return false;
-    // mixing weights mu_{i|j}: column j
-    TransitionMatrix w;
-    for (int j = 0; j < R; ++j)
-      for (int i = 0; i < R; ++i) w(i, j) = c(j) > 0.0 ? P(i, j) * mu_(i) / c(j) : (i == j ? 1.0 : 0.0);
+    if (!c.allFinite() || !(c.sum() > 0.0)) return Status::failure(Problem::mode_probabilities_vanished);
+    detail::mixing_weights<R>(P, mu_, c, w_);
 
     const Spread spread = spread_around_most_probable();
     // The mixed beliefs need every P_i, so they are built in the spare buffers (lower
     // triangles, one pass each) and the buffers are swapped once all are done.
-    hana::for_each(indices(), [&](auto j) { match_into(model_of(j), spread, w.col(decltype(j)::value), spare(j)); });
+    hana::for_each(indices(), [&](auto j) { match_into(model_of(j), spread, w_.col(decltype(j)::value), spare(j)); });
     for (auto& b : current_) b ^= 1u;
     c_ = c;
     log_lik_.setZero();
-    return true;
+    cycle_open_ = true;
+    return Status{};
   }
 
   /// Mode-matched prediction of every mode. All or nothing: if any mode rejects the step the
@@ -278,7 +226,7 @@ class Imm {
         ++result.taken_count;
         if (s.accepted()) ++result.accepted_count;
       } else {
-        s = score(mj, belief(j), z);
+        s = detail::score_prediction<N>(mj, belief(j), z, options_.filter);
       }
       result.mode[jj] = s;
       if (s.outcome == Outcome::invalid_input && result.problem == Problem::none) result.problem = s.problem;
@@ -299,6 +247,7 @@ class Imm {
   }
 
   /// mu_j ∝ exp(L_j) c_j with L_j the log-likelihood accumulated since mix(); closes the cycle.
+  /// Without an open cycle it changes nothing but the floor (c_j = mu_j and no likelihood).
   void update_mode_probabilities() {
     Probabilities log_post;
     for (int j = 0; j < R; ++j) log_post(j) = (c_(j) > 0.0 ? std::log(c_(j)) : -std::numeric_limits<double>::infinity()) + log_lik_(j);
@@ -308,36 +257,51 @@ class Imm {
       mu = (log_post.array() - top).exp().matrix();
       mu /= mu.sum();
     }
-    apply_floor(mu);
+    detail::apply_floor<R>(mu, options_.probability_floor);
     mu_ = mu;
     c_ = mu_;
     log_lik_.setZero();
+    cycle_open_ = false;
   }
 
-  /// Moment-matched combination of the mode estimates (around the most probable mode's point
-  /// for error-state modes).
-  Belief combined() const {
-    Belief out;
-    match_into(modes_[hana::size_c<0>].model, spread_around_most_probable(), mu_, out);
+  /// The common cycle in one call: mix(), predict(u, dt), update() with each observation in
+  /// order (make them with imm::observe), update_mode_probabilities(). A refused mix() stops
+  /// the cycle with nothing changed. A refused predict() skips the updates (they would correct
+  /// beliefs that are not at the measurements' time) but still closes the cycle, with no
+  /// likelihood: mu_j = c_j, the probabilities of the mixed beliefs the modes now hold.
+  template <class... Obs>
+  CycleResult<R, sizeof...(Obs)> cycle(const Input& u, double dt, const Obs&... obs) {
+    CycleResult<R, sizeof...(Obs)> out;
+    out.mix = mix();
+    if (!out.mix.accepted()) return out;
+    out.predict = predict(u, dt);
+    if (out.predict.accepted()) {
+      std::size_t k = 0;
+      ((out.updates[k++] = update(typename Obs::TagType{}, obs.model, obs.z, obs.mask)), ...);
+    }
+    update_mode_probabilities();
     return out;
   }
 
-  /// Replaces the mode probabilities (normalised, floored) without touching the estimates.
+  /// Moment-matched combination of the mode estimates (around the most probable mode's point
+  /// for error-state modes), weighted with combination_weights().
+  Belief combined() const { return combined_with(combination_weights()); }
+  /// The same with the weights named here rather than in the options (e.g. both priors side by
+  /// side); the same belief for both once the cycle is closed.
+  Belief combined(PriorWeights weights) const { return combined_with(weights == PriorWeights::predicted ? c_ : mu_); }
+
+  /// Replaces the mode probabilities (normalised, floored) without touching the estimates. An
+  /// open cycle stays open: its likelihoods so far will weigh these probabilities at the close.
   void set_mode_probabilities(const Probabilities& mu) {
     Probabilities p = mu.cwiseMax(0.0);
     const double s = p.sum();
     p = s > 0.0 ? Probabilities(p / s) : Probabilities::Constant(1.0 / R);
-    apply_floor(p);
+    detail::apply_floor<R>(p, options_.probability_floor);
     mu_ = p;
     c_ = p;
   }
 
-  static bool is_row_stochastic(const TransitionMatrix& P, double tol = 1e-9) {
-    if (!P.allFinite() || (P.array() < 0.0).any()) return false;
-    for (int i = 0; i < R; ++i)
-      if (std::abs(P.row(i).sum() - 1.0) > tol) return false;
-    return true;
-  }
+  static bool is_row_stochastic(const TransitionMatrix& P, double tol = 1e-9) { return detail::row_stochastic<R>(P, tol); }
 
  private:
   template <std::size_t J>
@@ -345,9 +309,12 @@ class Imm {
 
   static constexpr auto indices() { return hana::make_range(hana::size_c<0>, hana::size_c<R>); }
 
-  // Lower triangle of sum_i w_i (P_i + d_i d_i') with d_i = dx_i - m, in one pass per column:
-  // the weighted covariances and the rank-R spread of the means together, accumulated in
-  // registers (the textbook sum, without a pass over the whole matrix per term).
+  Belief combined_with(const Probabilities& weights) const {
+    Belief out;
+    match_into(modes_[hana::size_c<0>].model, spread_around_most_probable(), weights, out);
+    return out;
+  }
+
   /// The mode estimates as differences from the most probable mode's point (error-state modes
   /// mix in that mode's tangent space), with their covariances: what every moment match reads.
   struct Spread {
@@ -370,44 +337,9 @@ class Imm {
   template <class Model, class WeightExpr>
   static void match_into(const Model& model, const Spread& sp, const WeightExpr& weights, Belief& out) {
     const Vector<N> mean_dx = sp.dx.lazyProduct(weights);
-    moment_match_lower(sp.covs, sp.dx, mean_dx, weights, out.cov);
+    detail::moment_match_lower<N, R>(sp.covs, sp.dx, mean_dx, weights, out.cov);
     symmetrize(out.cov);
     detail::point(out) = state_inject(model, sp.ref_point, mean_dx);
-  }
-
-  template <class MeanExpr, class WeightExpr>
-  static void moment_match_lower(const std::array<const SquareMatrix<N>*, R>& covs, const Matrix<N, R>& dx,
-                                 const MeanExpr& m, const WeightExpr& w, SquareMatrix<N>& out) {
-    Matrix<N, R> d = dx.colwise() - Vector<N>(m);
-    Matrix<N, R> dw = d * Vector<R>(w).asDiagonal();
-    double wi[R];
-    for (int i = 0; i < R; ++i) wi[i] = w(i);
-    for (int c = 0; c < N; ++c) {
-      double dc[R];
-      const double* pc[R];
-      for (int i = 0; i < R; ++i) {
-        dc[i] = d(c, i);
-        pc[i] = covs[static_cast<std::size_t>(i)]->data() + c * N;
-      }
-      const double* dwd = dw.data();
-      double* o = out.data() + c * N;
-      // Two rows at a time, sums in registers (one SIMD pair per step).
-      int r = c;
-      for (; r + 1 < N; r += 2) {
-        double s0 = 0.0, s1 = 0.0;
-        for (int i = 0; i < R; ++i) {
-          s0 += wi[i] * pc[i][r] + dwd[i * N + r] * dc[i];
-          s1 += wi[i] * pc[i][r + 1] + dwd[i * N + r + 1] * dc[i];
-        }
-        o[r] = s0;
-        o[r + 1] = s1;
-      }
-      if (r < N) {
-        double s0 = 0.0;
-        for (int i = 0; i < R; ++i) s0 += wi[i] * pc[i][r] + dwd[i * N + r] * dc[i];
-        o[r] = s0;
-      }
-    }
   }
 
   template <class J>
@@ -447,49 +379,6 @@ class Imm {
     }
   }
 
-  // Innovation log-likelihood of the mode's prediction, without correcting it.
-  template <class Meas, class B, int M>
-  Status score(const Meas& meas, const B& belief, const Vector<M>& z) const {
-    const SquareMatrix<M> Rm = meas.noise(belief_point(belief));
-    if (Problem p = check_measurement<M>(z, Rm, options_.filter); p != Problem::none) return Status::invalid(p);
-    if (Problem p = ctxfuse::detail::model_check(meas, z); p != Problem::none) return Status::invalid(p);
-    Matrix<M, N> H;
-    const Vector<M> zp = meas.predict(belief_point(belief), &H);
-    const Vector<M> y = ctxfuse::detail::innovation(meas, z, zp);
-    if (!H.allFinite() || !y.allFinite()) return Status::failure(Problem::non_finite_prediction);
-    SquareMatrix<M> S = H * belief.cov * H.transpose();
-    S += Rm;
-    symmetrize(S);
-    const InnovationSolve<M> solve(S);
-    if (!solve.ok) return Status::failure(Problem::innovation_not_positive_definite);
-    Status s;
-    s.outcome = Outcome::gated;  // scored, not applied
-    s.dof = M;
-    s.nis = solve.nis(y);
-    s.log_likelihood = solve.log_likelihood(s.nis);
-    return s;
-  }
-
-  template <class B>
-  static const State& belief_point(const B& b) {
-    if constexpr (requires { b.nominal; })
-      return b.nominal;
-    else
-      return b.mean;
-  }
-
-  void apply_floor(Probabilities& mu) const {
-    const double floor = options_.probability_floor;
-    if (!(floor > 0.0) || floor * R >= 1.0) return;
-    // Raise the small ones to the floor and take the mass proportionally from the others, so
-    // that the floored entries stay exactly at the floor after renormalisation.
-    double fixed = 0.0, free = 0.0;
-    for (int j = 0; j < R; ++j) (mu(j) < floor ? fixed : free) += (mu(j) < floor ? floor : mu(j));
-    if (!(free > 0.0)) return;
-    const double scale = (1.0 - fixed) / free;
-    for (int j = 0; j < R; ++j) mu(j) = mu(j) < floor ? floor : mu(j) * scale;
-  }
-
   Mixing mixing_;
   hana::tuple<Modes...> modes_;
   // Two belief buffers per mode; current_[j] says which one holds mode j's belief. A step
@@ -498,8 +387,10 @@ class Imm {
   std::array<unsigned char, R> current_{};
   Probabilities mu_;
   Probabilities c_;
+  TransitionMatrix w_;  // mixing weights of the last mix(), column j = mu_{i|j}
   Probabilities log_lik_;
   ImmOptions<R> options_;
+  bool cycle_open_ = false;  // set by mix(), cleared by update_mode_probabilities()
 };
 
 }  // namespace ctxfuse::imm
