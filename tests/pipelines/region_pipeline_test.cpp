@@ -80,6 +80,108 @@ TEST(RegionPipeline, RegionImmWithoutRegionInformationIsThePlainImm) {
   }
 }
 
+// The recognised matrix M (w_m > 0) is part of the region IMM: with w_m = 0 the same labels
+// give another track.
+TEST(RegionPipeline, TheRecognisedMatrixChangesTheRegionImm) {
+  ri::Settings with_m, without_m;
+  without_m.prior_weight = 1.0;
+  ASSERT_GT(1.0 - with_m.prior_weight, 0.0);
+  const auto a = run(drive(), ri::Estimator::region_imm, with_m, &drive().true_labels);
+  const auto b = run(drive(), ri::Estimator::region_imm, without_m, &drive().true_labels);
+  ASSERT_EQ(a.t.size(), b.t.size());
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < a.t.size(); ++i) differ += (a.estimate[i] - b.estimate[i]).norm() > 1e-9;
+  EXPECT_GT(differ, a.t.size() / 10);
+}
+
+// Causality: the estimate at an epoch depends on the labels of earlier epochs only (the label
+// of epoch k routes and mixes the cycle that ends at epoch k + 1). Labels changed from epoch
+// k on leave every estimate up to epoch k as it was.
+TEST(RegionPipeline, LabelsOfLaterEpochsDoNotChangeEarlierEstimates) {
+  const auto& labels = drive().true_labels;
+  const auto base = run(drive(), ri::Estimator::region_imm, ri::Settings{}, &labels);
+  const double t_change = base.t[base.t.size() / 2];
+  std::vector<int> changed = labels;
+  std::size_t k = 0;
+  while (drive().features.t[k] < t_change) ++k;
+  for (std::size_t i = k; i < changed.size(); ++i) changed[i] = 2 - changed[i];  // outdoor <-> indoor
+  const auto other = run(drive(), ri::Estimator::region_imm, ri::Settings{}, &changed);
+  ASSERT_EQ(base.t.size(), other.t.size());
+  bool later_differ = false;
+  for (std::size_t i = 0; i < base.t.size(); ++i) {
+    if (base.t[i] <= t_change) {
+      ASSERT_EQ(base.estimate[i], other.estimate[i]) << "t " << base.t[i];
+    } else {
+      later_differ |= base.estimate[i] != other.estimate[i];
+    }
+  }
+  EXPECT_TRUE(later_differ);
+}
+
+// The region-adaptive matrix counts the transitions between the labels of consecutive epochs
+// from the start on, each once: after epoch k its counts are those of labels 0..k, counted by
+// hand; the start epoch adds no self-transition and the matrix is applied once there.
+TEST(RegionPipeline, TheRecognisedMatrixCountsEachTransitionOnceFromTheStart) {
+  using Mixing = policies::RegionAdaptiveTransition<3>;
+  const ri::Settings s;
+  ri::RegionTrack regions;
+  const std::vector<int> labels{0, 0, 1, 1, 1, 2, 2, 1, 0, 0};
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    regions.t.push_back(static_cast<double>(i));
+    regions.label.push_back(labels[i]);
+  }
+  ri::Aided<ri::ImmCore<Mixing>> imm(ri::ImmCore<Mixing>{&s, Mixing(policies::sticky_transition<3>(s.stay_probability), 0.5, 0.5), &regions},
+                                     s);
+  ri::Alignment a;
+  a.position = Eigen::Vector2d(5.0, -2.0);
+  a.velocity = Eigen::Vector2d(1.0, 0.0);
+  const auto b0 = ri::initial_belief(a, s);
+  imm.start(0.0, b0);
+  imm.epoch(0.0);
+  EXPECT_EQ(imm.core().f->mixing().counts(), Eigen::Matrix3d::Zero()) << "a transition counted at the start";
+  EXPECT_EQ(imm.track().estimate.front(), a.position);
+  models::PlanarImu u;
+  u.yaw_rate = 0.0;
+  u.accel = Eigen::Vector2d::Zero();
+  Eigen::Matrix3d expected = Eigen::Matrix3d::Zero();
+  for (std::size_t k = 1; k < labels.size(); ++k) {
+    for (int step = 0; step < 10; ++step) imm.predict(u, 0.1);
+    imm.epoch(static_cast<double>(k));
+    expected(labels[k - 1], labels[k]) += 1.0;
+    EXPECT_EQ(imm.core().f->mixing().counts(), expected) << "after epoch " << k;
+  }
+}
+
+// The static-weight FKF's master: x = sum beta_i x_i, P = sum beta_i^2 P_i, written plainly,
+// against the information-weighted master of the other FKF on the same locals.
+TEST(RegionPipeline, StaticWeightFederatedFilterCombinesTheLocalsWithFixedWeights) {
+  const ri::Settings s;
+  ri::Alignment a;
+  a.position = Eigen::Vector2d(5.0, -2.0);
+  a.velocity = Eigen::Vector2d(2.0, 1.0);
+  a.heading = 0.4;
+  const auto b0 = ri::initial_belief(a, s);
+  ri::FederatedCore fixed{&s, true}, informed{&s, false};
+  io::GnssFix fix;
+  fix.t = 1.0;
+  fix.position = Eigen::Vector3d(6.0, -1.0, 0.0);
+  fix.cov = Eigen::Matrix3d::Identity();
+  for (auto* c : {&fixed, &informed}) {
+    c->start(0.0, b0);
+    ASSERT_TRUE(c->gnss(fix)[0]->accepted());
+  }
+  const auto l0 = fixed.f->local(0), l1 = fixed.f->local(1);
+  fixed.close_cycle(1.0);
+  informed.close_cycle(1.0);
+  const Vector<8> mean = 0.5 * l0.mean + 0.5 * l1.mean;  // no heading wrap at these angles
+  const SquareMatrix<8> cov = 0.25 * l0.cov + 0.25 * l1.cov;
+  EXPECT_LT((fixed.f->global().mean - mean).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((fixed.f->global().cov - cov).cwiseAbs().maxCoeff(), 1e-12);
+  // Information weighting trusts the corrected local: its estimate is nearer the fix.
+  const auto p = [](const ri::FederatedCore& c) { return Eigen::Vector2d(c.f->global().mean.head<2>()); };
+  EXPECT_LT((p(informed) - fix.position.head<2>()).norm(), (p(fixed) - fix.position.head<2>()).norm());
+}
+
 TEST(RegionPipeline, RoutingChangesTheEstimateOnlyWhereItExcludesASensor) {
   // Labels "outdoor" everywhere: UWB is kept from every sub-model. Before the first UWB range
   // arrives the two runs must agree exactly; afterwards they must differ.
@@ -161,7 +263,7 @@ TEST(RegionPipeline, FiltersStartFromTheLogsOwnFixes) {
   const auto k = static_cast<std::size_t>(std::lround(a.t * drive().drive.config.imu.rate_hz));
   const double yaw = drive().drive.truth[k].yaw;
   EXPECT_LT(std::abs(std::remainder(a.heading - yaw, 2.0 * std::numbers::pi)), 3.0 * std::sqrt(a.heading_var));
-  for (auto e : {ri::Estimator::gnss, ri::Estimator::uwb, ri::Estimator::odr, ri::Estimator::fkf}) {
+  for (auto e : {ri::Estimator::gnss, ri::Estimator::uwb, ri::Estimator::odr, ri::Estimator::fkf, ri::Estimator::fkf_static}) {
     const auto tr = run(drive(), e, s);
     ASSERT_FALSE(tr.t.empty());
     EXPECT_EQ(tr.t.front(), a.t) << ri::name(e);

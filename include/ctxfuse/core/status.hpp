@@ -41,6 +41,11 @@ enum class Problem : std::uint8_t {
   covariance_not_positive_definite,  // a covariance that must be is not: a caller-supplied one
                                      // (e.g. a reset; invalid input) or a filter's own (fusion;
                                      // numerical failure)
+  // Snapshot solutions (filters/multilateration.hpp).
+  too_few_measurements,      // fewer than the unknowns need
+  degenerate_geometry,       // the normal equations are (nearly) singular
+  not_converged,             // the iterations did not settle
+  residual_above_threshold,  // the fit is inconsistent with the measurement noise (an outlier)
   // Filters made of several filters (filters/imm.hpp, filters/federated.hpp).
   imm_cycle_not_closed,              // mix() again before update_mode_probabilities()
   transition_matrix_not_stochastic,  // the mixing policy's matrix: negative, NaN or a row sum != 1
@@ -77,6 +82,10 @@ constexpr std::string_view describe(Problem p) {
     case Problem::transition_matrix_not_stochastic: return "mode transition matrix is not row-stochastic";
     case Problem::mode_probabilities_vanished: return "predicted mode probabilities are not finite or all zero";
     case Problem::local_filter_index_out_of_range: return "local filter index out of range";
+    case Problem::too_few_measurements: return "fewer measurements than unknowns";
+    case Problem::degenerate_geometry: return "geometry too poor to solve (nearly singular normal equations)";
+    case Problem::not_converged: return "the solution did not converge";
+    case Problem::residual_above_threshold: return "residuals inconsistent with the measurement noise";
   }
   return "unknown";
 }

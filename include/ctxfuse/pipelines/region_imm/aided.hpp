@@ -11,7 +11,7 @@
 //   integrity_view() -> the belief the integrity check compares with,
 //   takes_gnss(), takes_uwb(), watches_uwb() (whether a range feeds the integrity check),
 //   gnss(fix), uwb(range) -> Takes (per taker: the update's status, or nothing if not offered),
-//   close_cycle(), position(), dominant_mode(), taker_position(j), widen(j, reach),
+//   close_cycle(t), position(), dominant_mode(), taker_position(j), widen(j, reach),
 //   open_cycle(t).
 #pragma once
 
@@ -117,7 +117,7 @@ class Aided {
   /// opens the next cycle.
   void epoch(double t) {
     const io::GnssFix* fix = last_fix_ && last_fix_->t == t ? &*last_fix_ : nullptr;
-    core_.close_cycle();
+    core_.close_cycle(t);
     track_.record(t, core_.position(), core_.dominant_mode());
     // A lock-out of the estimator as a whole widens every taker and restarts their counts.
     const bool whole_lock = whole_ && whole_->lockout(t);

@@ -16,9 +16,11 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <vector>
 
+#include "ctxfuse/core/retraction.hpp"
 #include "ctxfuse/filters/ekf.hpp"
 #include "ctxfuse/filters/federated.hpp"
 #include "ctxfuse/filters/imm.hpp"
@@ -73,7 +75,7 @@ struct SingleCore {
   bool watches_uwb() const { return uwb_taker; }
   Takes<1> gnss(const io::GnssFix& e) { return {f->update(gnss_meas(e, *s, meas_factor), Vector<2>(e.position.head<2>()))}; }
   Takes<1> uwb(const io::UwbRange& r) { return {f->update(uwb_meas(r, *s, meas_factor), Vector<1>(r.range_m))}; }
-  void close_cycle() {}
+  void close_cycle(double) {}
   Eigen::Vector2d position() const { return L::get<"p">(f->belief().mean); }
   int dominant_mode() const { return -1; }
   Eigen::Vector2d taker_position(int) const { return position(); }
@@ -87,17 +89,22 @@ struct SingleCore {
 
 /// Federated filter: local filter 0 takes GNSS, local filter 1 takes UWB; both take the
 /// vehicle constraint with R / beta_i (its share); fusion and reset at every receiver epoch.
-/// The integrity check watches the UWB local filter.
+/// The integrity check watches the UWB local filter. With `static_weights` the master
+/// combines the locals with the fixed weights beta_i instead of their information:
+/// x = sum beta_i x_i (on the manifold, about local 0), P = sum beta_i^2 P_i (the covariance of
+/// that fixed combination of independent estimates), then resets the locals as usual.
 struct FederatedCore {
   static constexpr int kTakers = 1;
   static constexpr bool kWhole = false;
   using Filter = fkf::FederatedFilter<models::PlanarImuModel, 2, ChiSquareGate>;
   const Settings* s;
+  bool static_weights = false;
   std::array<double, 2> beta{0.5, 0.5};
   std::optional<Filter> f{};
 
   void start(double, const Gaussian<L::size>& b0) {
-    f.emplace(process_model(*s, 1.0), b0, beta, FilterOptions{}, ChiSquareGate(s->gate_probability));
+    process_model_ = process_model(*s, 1.0);
+    f.emplace(process_model_, b0, beta, FilterOptions{}, ChiSquareGate(s->gate_probability));
   }
   Status predict(const models::PlanarImu& u, double dt) { return f->predict(u, dt); }
   void speed(const io::SpeedSample& v) {
@@ -118,7 +125,23 @@ struct FederatedCore {
   Takes<1> uwb(const io::UwbRange& r) { return {f->update(1, uwb_meas(r, *s), Vector<1>(r.range_m))}; }
   // A refused fusion (the locals' information not positive definite) keeps the last global
   // estimate and the locals as they are; the next epoch fuses again.
-  void close_cycle() { (void)f->fuse_and_reset(); }
+  void close_cycle(double) {
+    if (!static_weights) {
+      (void)f->fuse_and_reset();
+      return;
+    }
+    const models::PlanarImuModel& m = process_model_;
+    Gaussian<L::size> g;
+    Vector<L::size> dx = Vector<L::size>::Zero();
+    g.cov.setZero();
+    for (int i = 0; i < 2; ++i) {
+      const auto bi = beta[static_cast<std::size_t>(i)];
+      dx += bi * state_difference(m, f->local(i).mean, f->local(0).mean);
+      g.cov += bi * bi * f->local(i).cov;
+    }
+    g.mean = state_inject(m, f->local(0).mean, dx);
+    (void)f->reset(g);  // a positive combination of the locals' covariances: still one
+  }
   Eigen::Vector2d position() const { return L::get<"p">(f->global().mean); }
   int dominant_mode() const { return -1; }
   Eigen::Vector2d taker_position(int) const { return position(); }
@@ -128,6 +151,7 @@ struct FederatedCore {
     (void)f->reset(g);  // still a covariance
   }
   void open_cycle(double) {}
+  models::PlanarImuModel process_model_{};
 };
 
 using OdrMode = imm::Mode<models::PlanarImuModel, imm::Accepts<GnssTag, SpeedTag>, ChiSquareGate>;
@@ -162,13 +186,16 @@ struct ImmCore {
   std::optional<RegionImm<Mixing>> f{};
   int region = -1;
   Gaussian<L::size> view{};
+  double opened_at = std::numeric_limits<double>::quiet_NaN();  // when the open cycle began
 
+  // The first cycle opens at the start; the receiver epoch at the start time (the fix the
+  // filters start on is one) then neither closes it nor opens another, so that the start's
+  // region is observed once (no self-transition counted into M) and the matrix is applied once.
   void start(double t0, const Gaussian<L::size>& b0) {
     imm::ImmOptions<3> o;
     o.probability_floor = s->probability_floor;
     f.emplace(mixing, make_modes(*s), b0, Vector<3>::Constant(1.0 / 3.0), o);
-    observe_region(t0);
-    (void)f->mix();  // the first cycle: nothing open to refuse
+    open_cycle(t0);
   }
   Status predict(const models::PlanarImu& u, double dt) { return f->predict(u, dt); }
   void speed(const io::SpeedSample& v) {
@@ -192,7 +219,9 @@ struct ImmCore {
     const auto m = boost::hana::make_tuple(uwb_meas(r, *s), uwb_meas(r, *s, s->iotr_noise_factor), uwb_meas(r, *s));
     return takes_of(f->update(UwbTag{}, m, Vector<1>(r.range_m), mask(false)));
   }
-  void close_cycle() { f->update_mode_probabilities(); }
+  void close_cycle(double t) {
+    if (t != opened_at) f->update_mode_probabilities();
+  }
   Eigen::Vector2d position() const { return L::get<"p">(f->combined().mean); }
   int dominant_mode() const { return f->most_probable(); }
   Eigen::Vector2d taker_position(int j) const {
@@ -210,8 +239,10 @@ struct ImmCore {
   /// Next cycle: the region recognised at this epoch (the latest known) routes the
   /// measurements until the next epoch.
   void open_cycle(double t) {
+    if (t == opened_at) return;
     observe_region(t);
-    (void)f->mix();  // the cycle was closed by close_cycle()
+    (void)f->mix();  // the previous cycle was closed by close_cycle(): nothing to refuse
+    opened_at = t;
   }
 
   /// Which modes take a source now: bit j for mode j.

@@ -169,6 +169,7 @@ RunResult run(const io::SensorLog& log, Estimator e, const Settings& s, const Ru
                               k == 1 ? s.iotr_noise_factor : 1.0});
     }
     case Estimator::fkf: return aided(FederatedCore{&s});
+    case Estimator::fkf_static: return aided(FederatedCore{&s, true});
     case Estimator::imm: {
       using M = policies::FixedTransition<3>;
       return aided(ImmCore<M>{&s, detail::make_mixing<M>(s), nullptr});
