@@ -5,7 +5,7 @@
 #include <sstream>
 #include <string>
 
-#include "ctxfuse/sim/log_io.hpp"
+#include "ctxfuse/io/sim_logs.hpp"
 
 namespace sim = ctxfuse::sim;
 

@@ -17,12 +17,16 @@
 // which it wants simultaneous measurements; e.g. ranges before the fix of the same epoch).
 // Without an IMU stream (an empty span), nothing is propagated: the handler predicts with its
 // own motion model from the measurement times. With one, measurements after the last IMU sample
-// are not delivered (there is nothing to propagate them with) and are counted.
+// are not delivered (there is nothing to propagate them with) and are counted; measurements
+// before the first IMU sample are delivered unpropagated (the state the handler starts from:
+// a pipeline may start from the first fixes before the IMU runs).
 //
 // Stamps are checked per stream, never repaired: a non-finite stamp, one before the previous
 // delivered stamp of its stream, or (for streams whose messages may not share a stamp) one
-// equal to it, drops the message and counts it; exact duplicates are dropped in every stream.
-// Nothing is reordered. The report says what was delivered and dropped, per stream.
+// equal to it (`repeated`), drops the message and counts it; in streams whose messages share
+// stamps (UWB ranges of several anchors), the same measurement again (same anchor and stamp) is
+// a `duplicate`. Nothing is reordered. The report says what was delivered and dropped, per
+// stream.
 //
 // `tamper` is the fault-injection hook: before a message's stamp is checked it may drop the
 // message or change any of its fields (delay its stamp, corrupt its values), so injected faults
@@ -35,12 +39,14 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <optional>
 #include <span>
 #include <tuple>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 #include "ctxfuse/io/messages.hpp"
 
@@ -53,7 +59,8 @@ inline constexpr bool kSharedStamps = false;
 template <>
 inline constexpr bool kSharedStamps<UwbRange> = true;
 
-/// Two messages that are the same measurement delivered twice.
+/// Two messages of a shared-stamp stream that are the same measurement delivered twice (in
+/// other streams the stamp alone identifies a measurement: an equal stamp is `repeated`).
 template <class Msg>
 bool same_measurement(const Msg& a, const Msg& b) {
   if constexpr (std::is_same_v<Msg, UwbRange>)
@@ -69,7 +76,7 @@ struct StreamReport {
   std::size_t non_finite = 0;  // stamp NaN or infinite
   std::size_t backwards = 0;   // stamp before the previous delivered one of the stream
   std::size_t repeated = 0;    // stamp equal to the previous one where stamps may not be shared
-  std::size_t duplicate = 0;   // the same measurement again
+  std::size_t duplicate = 0;   // the same measurement again where stamps may be shared
   std::size_t beyond_imu = 0;  // after the last IMU sample
   std::size_t tampered = 0;    // dropped by the tamper hook
   std::size_t dropped() const { return non_finite + backwards + repeated + duplicate + beyond_imu + tampered; }
@@ -137,39 +144,39 @@ class Cursor {
   double time() const { return head_ ? head_->t : std::numeric_limits<double>::infinity(); }
   /// The head was delivered: it becomes the reference of the stamp checks.
   void accept() {
-    last_ = *head_;
+    last_t_ = head_->t;
+    have_last_ = true;
     if constexpr (kSharedStamps<Msg>) recent_.push(*head_);
   }
 
  private:
+  // Only the stamp of the previous message is kept (a copy of a satellite epoch would
+  // allocate per message), and for shared-stamp streams the messages of that stamp.
   StampProblem check(const Msg& m) const {
     if (!std::isfinite(m.t)) return StampProblem::non_finite;
-    if (!last_) return StampProblem::none;
-    if (m.t < last_->t) return StampProblem::backwards;
-    if (m.t == last_->t) {
-      if constexpr (kSharedStamps<Msg>) {
-        if (recent_.contains(m)) return StampProblem::duplicate;
-        return StampProblem::none;
-      } else {
-        return same_measurement(m, *last_) ? StampProblem::duplicate : StampProblem::repeated;
-      }
+    if (!have_last_) return StampProblem::none;
+    if (m.t < last_t_) return StampProblem::backwards;
+    if (m.t == last_t_) {
+      if constexpr (kSharedStamps<Msg>)
+        return recent_.contains(m) ? StampProblem::duplicate : StampProblem::none;
+      else
+        return StampProblem::repeated;
     }
     return StampProblem::none;
   }
 
-  /// The messages of the current stamp (a few anchors), for the duplicate check; fixed
-  /// capacity, so that a replay never allocates per message.
+  /// The delivered messages of the current stamp (a few anchors), for the duplicate check.
+  /// Cleared, not freed, at each new stamp: it allocates only when a stamp has more messages
+  /// than any before it, and it has no capacity past which a duplicate would go unseen.
   struct Recent {
-    static constexpr std::size_t kCapacity = 64;
-    std::array<Msg, kCapacity> items{};
-    std::size_t size = 0;
+    std::vector<Msg> items;
     void push(const Msg& m) {
-      if (size > 0 && items[0].t != m.t) size = 0;
-      if (size < kCapacity) items[size++] = m;
+      if (!items.empty() && items.front().t != m.t) items.clear();
+      items.push_back(m);
     }
     bool contains(const Msg& m) const {
-      for (std::size_t i = 0; i < size; ++i)
-        if (same_measurement(items[i], m)) return true;
+      for (const auto& x : items)
+        if (same_measurement(x, m)) return true;
       return false;
     }
   };
@@ -177,7 +184,8 @@ class Cursor {
   std::span<const Msg> messages_;
   std::size_t next_ = 0;
   const Msg* head_ = nullptr;
-  std::optional<Msg> last_;
+  double last_t_ = 0.0;
+  bool have_last_ = false;
   std::optional<Msg> scratch_;
   [[no_unique_address]] std::conditional_t<kSharedStamps<Msg>, Recent, std::tuple<>> recent_{};
 };

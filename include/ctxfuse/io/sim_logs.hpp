@@ -1,51 +1,46 @@
-// CSV logs of a drive (imu.csv, gnss.csv, sats.csv, uwb.csv, speed.csv, mag.csv, truth.csv;
-// columns in docs/formats.md) and their readers. Readers reject, with the file, line and field
-// named: a wrong header, a wrong number of fields, text that is not a number, non-finite
-// values, labels out of range and time going backwards. A malformed file never crashes.
+// The simulator's CSV logs (imu.csv, gnss.csv, sats.csv, uwb.csv, speed.csv, mag.csv,
+// truth.csv; columns in docs/formats.md): the writer, and the readers on io/text.hpp.
+//
+//   write_drive_logs(drive, dir)   the seven files of a simulated drive
+//   read_sim_logs(dir)             what a pipeline runs on (io::SensorLog, no truth) and, apart,
+//                                  the truth and labels scoring reads (eval::TruthLog)
+//   sim::read_drive_logs(dir)      the files row by row as the simulator's structs, truth
+//                                  fields and all (the API of the former sim/log_io.hpp)
+//
+// Every double is written in its shortest round-trip form (std::to_chars, independent of any
+// locale), so a drive written and read back is bit for bit the drive: read_sim_logs gives
+// exactly sim::sensor_log(drive). The readers reject, as io::ParseError naming file:line:column
+// and the column's name: a wrong header, a wrong number of fields, text that is not a number,
+// non-finite values and magnitudes above 1e12, labels out of range, values outside their
+// physical range, time going backwards, and sats.csv rows that do not match gnss.csv's epochs.
 #pragma once
 
 #include <Eigen/Core>
 
 #include <charconv>
 #include <cmath>
-#include <cstdio>
+#include <cstddef>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <ostream>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <string_view>
 #include <system_error>
+#include <utility>
 #include <vector>
 
+#include "ctxfuse/eval/truth.hpp"
+#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/io/text.hpp"
 #include "ctxfuse/sim/drive.hpp"
+#include "ctxfuse/sim/streams.hpp"
 
 namespace ctxfuse::sim {
 
-/// A log could not be read. line is 1-based (0: the file as a whole); field may be empty.
-class LogError : public std::runtime_error {
- public:
-  LogError(std::string file, std::size_t line, std::string field, const std::string& problem)
-      : std::runtime_error(compose(file, line, field, problem)), file_(std::move(file)), line_(line), field_(std::move(field)) {}
-  const std::string& file() const { return file_; }
-  std::size_t line() const { return line_; }
-  const std::string& field() const { return field_; }
-
- private:
-  static std::string compose(const std::string& file, std::size_t line, const std::string& field, const std::string& problem) {
-    std::string s = file;
-    if (line > 0) s += ":" + std::to_string(line);
-    s += ": ";
-    if (!field.empty()) s += "field '" + field + "': ";
-    return s + problem;
-  }
-  std::string file_;
-  std::size_t line_;
-  std::string field_;
-};
-
-/// Everything the log files carry (sensor outputs, per-range/per-satellite labels, truth).
+/// Everything the log files carry, row by row (sensor outputs, per-range/per-satellite labels,
+/// truth).
 struct DriveLog {
   std::vector<TruthSample> truth;
   std::vector<ImuSample> imu;
@@ -55,6 +50,18 @@ struct DriveLog {
   std::vector<SpeedSample> speed;
   std::vector<MagSample> mag;
 };
+
+}  // namespace ctxfuse::sim
+
+namespace ctxfuse::io {
+
+/// A simulated drive's logs read back: the sensor streams, and the truth and labels apart.
+struct SimLogs {
+  SensorLog sensors;
+  eval::TruthLog truth;  // truth.csv, the `los` of sats.csv, the `nlos` of uwb.csv; no fix labels
+};
+
+namespace sim_csv {
 
 inline constexpr const char* kImuHeader = "t,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z";
 inline constexpr const char* kGnssHeader = "t,fix,east,north,up,std_h,std_v,num_sats,pdop,hdop,mean_cn0";
@@ -67,129 +74,86 @@ inline constexpr const char* kTruthHeader =
 
 namespace detail {
 
-/// Writes numbers with 10 significant digits via snprintf ("C" locale formatting, the same
-/// bytes whatever the compiler).
-class CsvWriter {
+/// One CSV row at a time. Numbers go through std::to_chars: the shortest text that reads back
+/// to the same double, and no locale (an ostream's imbued locale could group digits or change
+/// the decimal point).
+class Writer {
  public:
-  explicit CsvWriter(std::ostream& os) : os_(os) {}
-  CsvWriter& num(double v) {
-    char buf[40];
-    const int n = std::snprintf(buf, sizeof buf, "%.10g", v);
-    sep();
-    os_.write(buf, n);
-    return *this;
-  }
-  CsvWriter& integer(long long v) {
-    sep();
-    os_ << v;
-    return *this;
-  }
-  CsvWriter& vec(const Eigen::Vector3d& v) { return num(v.x()).num(v.y()).num(v.z()); }
+  explicit Writer(std::ostream& os) : os_(os) {}
+  Writer& num(double v) { return put(v); }
+  Writer& integer(long long v) { return put(v); }
+  Writer& vec(const Eigen::Vector3d& v) { return num(v.x()).num(v.y()).num(v.z()); }
   void end() {
-    os_ << '\n';
+    os_.put('\n');
     first_ = true;
   }
 
  private:
-  void sep() {
-    if (!first_) os_ << ',';
+  template <class T>
+  Writer& put(T v) {
+    char buf[32];  // a shortest double needs at most 24 characters, a long long 20
+    const auto r = std::to_chars(buf, buf + sizeof buf, v);
+    if (!first_) os_.put(',');
     first_ = false;
+    os_.write(buf, r.ptr - buf);
+    return *this;
   }
   std::ostream& os_;
   bool first_ = true;
 };
 
-/// Splits and parses one CSV file; every failure becomes a LogError naming file/line/field.
-class CsvReader {
+/// The rows of one log file after its header, split by io/text.hpp; every accessor throws
+/// ParseError naming file:line:column and the column.
+class Rows {
  public:
-  CsvReader(std::istream& in, std::string file, std::string_view header) : in_(in), file_(std::move(file)) {
-    std::string line;
-    if (!std::getline(in_, line)) throw LogError(file_, 1, "", "empty file: expected the header '" + std::string(header) + "'");
-    line_no_ = 1;
-    strip_cr(line);
-    if (line != header) throw LogError(file_, 1, "", "header is '" + line + "', expected '" + std::string(header) + "'");
-    std::string_view h = header;
-    while (true) {
-      const auto comma = h.find(',');
-      names_.emplace_back(h.substr(0, comma));
-      if (comma == std::string_view::npos) break;
-      h.remove_prefix(comma + 1);
-    }
+  Rows(const std::filesystem::path& path, std::string_view header)
+      : file_(path), header_(split_fields(header, Separator::comma)), fields_(file_.name(), &header_) {
+    std::string_view line;
+    if (!file_.next(line)) throw ParseError(file_.name(), 1, 0, "", cat("empty file: expected the header ", quote(header)));
+    if (line != header) file_.fail(cat("header is ", quote(line), ", expected ", quote(header)));
   }
 
-  /// Advances to the next non-empty row; false at the end of the file.
+  /// Advances to the next non-blank row; false at the end of the file.
   bool next() {
-    while (std::getline(in_, row_)) {
-      ++line_no_;
-      strip_cr(row_);
-      if (row_.empty()) continue;
-      fields_.clear();
-      std::string_view r = row_;
-      while (true) {
-        const auto comma = r.find(',');
-        fields_.push_back(r.substr(0, comma));
-        if (comma == std::string_view::npos) break;
-        r.remove_prefix(comma + 1);
-      }
-      if (fields_.size() != names_.size())
-        throw LogError(file_, line_no_, "", "expected " + std::to_string(names_.size()) + " fields, found " + std::to_string(fields_.size()));
-      return true;
-    }
-    return false;
+    if (!next_fields(file_, fields_, Separator::comma)) return false;
+    fields_.expect_count(header_.size());
+    return true;
   }
 
-  double number(std::size_t i) const {
-    const std::string_view f = trim(fields_[i]);
-    double v = 0.0;
-    const auto res = std::from_chars(f.data(), f.data() + f.size(), v);
-    if (f.empty() || res.ec != std::errc() || res.ptr != f.data() + f.size())
-      throw error(i, "'" + std::string(f) + "' is not a number");
-    if (!std::isfinite(v)) throw error(i, "value '" + std::string(f) + "' is not finite");
-    if (std::abs(v) > 1e12) throw error(i, "value '" + std::string(f) + "' is absurdly large");
+  double num(std::size_t i) const { return fields_.real(i, kRules); }
+  Eigen::Vector3d vec(std::size_t i) const { return {num(i), num(i + 1), num(i + 2)}; }
+  template <class Int>
+  Int integer(std::size_t i, Int lo, Int hi) const {
+    return fields_.integer<Int>(i, lo, hi);
+  }
+  bool flag(std::size_t i) const { return integer<int>(i, 0, 1) == 1; }
+  /// num(i), which `ok` must accept; otherwise the message names the rule and the value.
+  template <class Ok>
+  double num_if(std::size_t i, Ok ok, std::string_view rule) const {
+    const double v = num(i);
+    if (!ok(v)) fail(i, cat(rule, " (is ", v, ")"));
     return v;
   }
-  long long integer(std::size_t i, long long lo, long long hi) const {
-    const std::string_view f = trim(fields_[i]);
-    long long v = 0;
-    const auto res = std::from_chars(f.data(), f.data() + f.size(), v);
-    if (f.empty() || res.ec != std::errc() || res.ptr != f.data() + f.size())
-      throw error(i, "'" + std::string(f) + "' is not an integer");
-    if (v < lo || v > hi) throw error(i, std::to_string(v) + " is outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-    return v;
-  }
-  Eigen::Vector3d vec(std::size_t i) const { return {number(i), number(i + 1), number(i + 2)}; }
 
-  /// Time in column 0; strictly increasing, or non-decreasing when several rows share an epoch.
+  /// Time in column 0: strictly increasing, or non-decreasing where several rows share an
+  /// epoch (satellites, anchors).
   double time(bool rows_share_epochs) {
-    const double t = number(0);
+    const double t = num(0);
     if (have_time_ && (rows_share_epochs ? t < last_t_ : t <= last_t_))
-      throw error(0, "time " + std::to_string(t) + " is not after the previous row's " + std::to_string(last_t_) +
-                         (rows_share_epochs ? " (out of order)" : " (times must increase)"));
+      fail(0, cat("time ", t, " is not after the previous row's ", last_t_,
+                  rows_share_epochs ? " (out of order)" : " (times must increase)"));
     last_t_ = t;
     have_time_ = true;
     return t;
   }
 
-  LogError error(std::size_t i, const std::string& problem) const { return LogError(file_, line_no_, names_[i], problem); }
-  LogError error(const std::string& problem) const { return LogError(file_, line_no_, "", problem); }
-  const std::string& file() const { return file_; }
-  std::size_t line() const { return line_no_; }
+  [[noreturn]] void fail(std::size_t i, std::string reason) const { fields_.fail(i, std::move(reason)); }
 
  private:
-  static void strip_cr(std::string& s) {
-    if (!s.empty() && s.back() == '\r') s.pop_back();
-  }
-  static std::string_view trim(std::string_view s) {
-    while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-    while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
-    return s;
-  }
-  std::istream& in_;
-  std::string file_;
-  std::vector<std::string> names_;
-  std::string row_;
-  std::vector<std::string_view> fields_;
-  std::size_t line_no_ = 0;
+  static constexpr RealRules kRules{false, 1e12};  // a 1e300 in a drive log is corruption
+  TextFile file_;
+  Header header_;
+  Fields fields_;
   double last_t_ = 0.0;
   bool have_time_ = false;
 };
@@ -198,62 +162,13 @@ class CsvReader {
 
 // ---- writers ----
 
-inline void write_imu_csv(std::ostream& os, const std::vector<ImuSample>& v) {
-  os << kImuHeader << '\n';
-  detail::CsvWriter w(os);
-  for (const auto& s : v) {
-    w.num(s.t).vec(s.gyro).vec(s.accel);
-    w.end();
-  }
-}
-inline void write_gnss_csv(std::ostream& os, const std::vector<GnssEpoch>& v) {
-  os << kGnssHeader << '\n';
-  detail::CsvWriter w(os);
-  for (const auto& e : v) {
-    w.num(e.t).integer(e.has_fix ? 1 : 0).vec(e.position).num(e.std_horizontal_m).num(e.std_vertical_m);
-    w.integer(e.num_sats).num(e.pdop).num(e.hdop).num(e.mean_cn0_dbhz);
-    w.end();
-  }
-}
-inline void write_sats_csv(std::ostream& os, const std::vector<SatObservation>& v) {
-  os << kSatsHeader << '\n';
-  detail::CsvWriter w(os);
-  for (const auto& s : v) {
-    w.num(s.t).integer(s.sat_id).num(s.elevation_deg).num(s.azimuth_deg).num(s.cn0_dbhz).integer(s.line_of_sight ? 1 : 0);
-    w.end();
-  }
-}
-inline void write_uwb_csv(std::ostream& os, const std::vector<UwbRange>& v) {
-  os << kUwbHeader << '\n';
-  detail::CsvWriter w(os);
-  for (const auto& r : v) {
-    w.num(r.t).integer(r.anchor_id).vec(r.anchor_position).num(r.range_m).num(r.rssi_dbm).num(r.rssi_first_path_dbm);
-    w.integer(r.nlos ? 1 : 0);
-    w.end();
-  }
-}
-inline void write_speed_csv(std::ostream& os, const std::vector<SpeedSample>& v) {
-  os << kSpeedHeader << '\n';
-  detail::CsvWriter w(os);
-  for (const auto& s : v) {
-    w.num(s.t).num(s.speed_mps);
-    w.end();
-  }
-}
-inline void write_mag_csv(std::ostream& os, const std::vector<MagSample>& v) {
-  os << kMagHeader << '\n';
-  detail::CsvWriter w(os);
-  for (const auto& s : v) {
-    w.num(s.t).vec(s.field_ut);
-    w.end();
-  }
-}
-inline void write_truth_csv(std::ostream& os, const std::vector<TruthSample>& v) {
-  os << kTruthHeader << '\n';
-  detail::CsvWriter w(os);
-  for (const auto& s : v) {
-    w.num(s.t).vec(s.position).vec(s.velocity).num(s.roll).num(s.pitch).num(s.yaw).vec(s.angular_rate).vec(s.specific_force);
-    w.num(s.speed).integer(static_cast<int>(s.region)).integer(static_cast<int>(s.scene)).integer(s.is_static ? 1 : 0);
+/// The header, then row(writer, x) for each element of v.
+template <class T, class Row>
+void write_rows(std::ostream& os, std::string_view header, const std::vector<T>& v, Row row) {
+  os << header << '\n';
+  detail::Writer w(os);
+  for (const auto& x : v) {
+    row(w, x);
     w.end();
   }
 }
@@ -265,193 +180,229 @@ inline const std::vector<std::string>& log_file_names() {
 }
 
 /// Writes one log file by name from the drive (used by write_drive_logs and the tests).
-inline void write_log(std::ostream& os, const Drive& d, std::string_view name) {
-  if (name == "imu.csv") write_imu_csv(os, d.imu);
-  else if (name == "gnss.csv") write_gnss_csv(os, d.gnss);
-  else if (name == "sats.csv") write_sats_csv(os, d.sats);
-  else if (name == "uwb.csv") write_uwb_csv(os, d.uwb);
-  else if (name == "speed.csv") write_speed_csv(os, d.speed);
-  else if (name == "mag.csv") write_mag_csv(os, d.mag);
-  else if (name == "truth.csv") write_truth_csv(os, d.truth);
-  else throw std::invalid_argument("sim: unknown log file '" + std::string(name) + "'");
-}
-
-/// Writes all seven files into dir (created if needed). Throws std::runtime_error naming
-/// the file that could not be written.
-inline void write_drive_logs(const Drive& d, const std::filesystem::path& dir) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw std::runtime_error(dir.string() + ": cannot create directory: " + ec.message());
-  for (const auto& name : log_file_names()) {
-    const auto path = dir / name;
-    std::ofstream os(path, std::ios::binary);
-    if (!os) throw std::runtime_error(path.string() + ": cannot open for writing");
-    write_log(os, d, name);
-    os.flush();
-    if (!os) throw std::runtime_error(path.string() + ": write failed");
+inline void write_log(std::ostream& os, const sim::Drive& d, std::string_view name) {
+  using W = detail::Writer;
+  if (name == "imu.csv") {
+    write_rows(os, kImuHeader, d.imu, [](W& w, const sim::ImuSample& s) { w.num(s.t).vec(s.gyro).vec(s.accel); });
+  } else if (name == "gnss.csv") {
+    write_rows(os, kGnssHeader, d.gnss, [](W& w, const sim::GnssEpoch& e) {
+      w.num(e.t).integer(e.has_fix ? 1 : 0).vec(e.position).num(e.std_horizontal_m).num(e.std_vertical_m);
+      w.integer(e.num_sats).num(e.pdop).num(e.hdop).num(e.mean_cn0_dbhz);
+    });
+  } else if (name == "sats.csv") {
+    write_rows(os, kSatsHeader, d.sats, [](W& w, const sim::SatObservation& s) {
+      w.num(s.t).integer(s.sat_id).num(s.elevation_deg).num(s.azimuth_deg).num(s.cn0_dbhz).integer(s.line_of_sight ? 1 : 0);
+    });
+  } else if (name == "uwb.csv") {
+    write_rows(os, kUwbHeader, d.uwb, [](W& w, const sim::UwbRange& r) {
+      w.num(r.t).integer(r.anchor_id).vec(r.anchor_position).num(r.range_m).num(r.rssi_dbm).num(r.rssi_first_path_dbm);
+      w.integer(r.nlos ? 1 : 0);
+    });
+  } else if (name == "speed.csv") {
+    write_rows(os, kSpeedHeader, d.speed, [](W& w, const sim::SpeedSample& s) { w.num(s.t).num(s.speed_mps); });
+  } else if (name == "mag.csv") {
+    write_rows(os, kMagHeader, d.mag, [](W& w, const sim::MagSample& s) { w.num(s.t).vec(s.field_ut); });
+  } else if (name == "truth.csv") {
+    write_rows(os, kTruthHeader, d.truth, [](W& w, const sim::TruthSample& s) {
+      w.num(s.t).vec(s.position).vec(s.velocity).num(s.roll).num(s.pitch).num(s.yaw).vec(s.angular_rate).vec(s.specific_force);
+      w.num(s.speed).integer(static_cast<int>(s.region)).integer(static_cast<int>(s.scene)).integer(s.is_static ? 1 : 0);
+    });
+  } else {
+    throw std::invalid_argument(cat("sim logs: unknown log file ", quote(name)));
   }
 }
 
-// ---- readers ----
+// ---- readers, one per file ----
 
-inline std::vector<ImuSample> read_imu_csv(std::istream& in, const std::string& file) {
-  detail::CsvReader r(in, file, kImuHeader);
-  std::vector<ImuSample> out;
-  while (r.next()) {
-    ImuSample s;
-    s.t = r.time(false);
-    s.gyro = r.vec(1);
-    s.accel = r.vec(4);
-    out.push_back(s);
-  }
+inline std::vector<sim::ImuSample> read_imu(const std::filesystem::path& path) {
+  detail::Rows r(path, kImuHeader);
+  std::vector<sim::ImuSample> out;
+  while (r.next()) out.push_back({r.time(false), r.vec(1), r.vec(4)});
   return out;
 }
 
-inline std::vector<GnssEpoch> read_gnss_csv(std::istream& in, const std::string& file) {
-  detail::CsvReader r(in, file, kGnssHeader);
-  std::vector<GnssEpoch> out;
+inline std::vector<sim::GnssEpoch> read_gnss(const std::filesystem::path& path) {
+  detail::Rows r(path, kGnssHeader);
+  std::vector<sim::GnssEpoch> out;
   while (r.next()) {
-    GnssEpoch e;
+    sim::GnssEpoch e;
     e.t = r.time(false);
-    e.has_fix = r.integer(1, 0, 1) == 1;
+    e.has_fix = r.flag(1);
     e.position = r.vec(2);
-    e.std_horizontal_m = r.number(5);
-    e.std_vertical_m = r.number(6);
-    e.num_sats = static_cast<int>(r.integer(7, 0, 1000));
-    e.pdop = r.number(8);
-    e.hdop = r.number(9);
-    e.mean_cn0_dbhz = r.number(10);
+    e.std_horizontal_m = r.num(5);
+    e.std_vertical_m = r.num(6);
+    e.num_sats = r.integer<int>(7, 0, 1000);
+    e.pdop = r.num(8);
+    e.hdop = r.num(9);
+    e.mean_cn0_dbhz = r.num(10);
     if (e.has_fix && (e.std_horizontal_m <= 0.0 || e.std_vertical_m <= 0.0))
-      throw r.error(5, "a fix needs positive std_h and std_v");
-    if (e.has_fix && e.num_sats < 4) throw r.error(7, "a fix needs at least 4 satellites");
+      r.fail(e.std_horizontal_m <= 0.0 ? 5 : 6, "a fix needs positive std_h and std_v");
+    if (e.has_fix && e.num_sats < 4) r.fail(7, "a fix needs at least 4 satellites");
     out.push_back(e);
   }
   return out;
 }
 
-inline std::vector<SatObservation> read_sats_csv(std::istream& in, const std::string& file) {
-  detail::CsvReader r(in, file, kSatsHeader);
-  std::vector<SatObservation> out;
+inline std::vector<sim::SatObservation> read_sats(const std::filesystem::path& path) {
+  detail::Rows r(path, kSatsHeader);
+  std::vector<sim::SatObservation> out;
   while (r.next()) {
-    SatObservation s;
+    sim::SatObservation s;
     s.t = r.time(true);
-    s.sat_id = static_cast<int>(r.integer(1, 1, 999));
-    s.elevation_deg = r.number(2);
-    s.azimuth_deg = r.number(3);
-    s.cn0_dbhz = r.number(4);
-    s.line_of_sight = r.integer(5, 0, 1) == 1;
-    if (s.elevation_deg < -90.0 || s.elevation_deg > 90.0) throw r.error(2, "elevation must be within [-90, 90] deg");
-    if (s.azimuth_deg < 0.0 || s.azimuth_deg >= 360.0) throw r.error(3, "azimuth must be within [0, 360) deg");
-    if (s.cn0_dbhz < 0.0 || s.cn0_dbhz > 70.0) throw r.error(4, "C/N0 must be within [0, 70] dB-Hz");
+    s.sat_id = r.integer<int>(1, 1, 999);
+    s.elevation_deg = r.num_if(2, [](double v) { return v >= -90.0 && v <= 90.0; }, "elevation must be within [-90, 90] deg");
+    s.azimuth_deg = r.num_if(3, [](double v) { return v >= 0.0 && v < 360.0; }, "azimuth must be within [0, 360) deg");
+    s.cn0_dbhz = r.num_if(4, [](double v) { return v >= 0.0 && v <= 70.0; }, "C/N0 must be within [0, 70] dB-Hz");
+    s.line_of_sight = r.flag(5);
     out.push_back(s);
   }
   return out;
 }
 
-inline std::vector<UwbRange> read_uwb_csv(std::istream& in, const std::string& file) {
-  detail::CsvReader r(in, file, kUwbHeader);
-  std::vector<UwbRange> out;
+inline std::vector<sim::UwbRange> read_uwb(const std::filesystem::path& path) {
+  detail::Rows r(path, kUwbHeader);
+  std::vector<sim::UwbRange> out;
   while (r.next()) {
-    UwbRange u;
+    sim::UwbRange u;
     u.t = r.time(true);
-    u.anchor_id = static_cast<int>(r.integer(1, 0, 1'000'000));
+    u.anchor_id = r.integer<int>(1, 0, 1'000'000);
     u.anchor_position = r.vec(2);
-    u.range_m = r.number(5);
-    u.rssi_dbm = r.number(6);
-    u.rssi_first_path_dbm = r.number(7);
-    u.nlos = r.integer(8, 0, 1) == 1;
-    if (u.range_m < -10.0 || u.range_m > 1e4) throw r.error(5, "range must be within [-10, 10000] m");
+    u.range_m = r.num_if(5, [](double v) { return v >= -10.0 && v <= 1e4; }, "range must be within [-10, 10000] m");
+    u.rssi_dbm = r.num(6);
+    u.rssi_first_path_dbm = r.num(7);
+    u.nlos = r.flag(8);
     out.push_back(u);
   }
   return out;
 }
 
-inline std::vector<SpeedSample> read_speed_csv(std::istream& in, const std::string& file) {
-  detail::CsvReader r(in, file, kSpeedHeader);
-  std::vector<SpeedSample> out;
+inline std::vector<sim::SpeedSample> read_speed(const std::filesystem::path& path) {
+  detail::Rows r(path, kSpeedHeader);
+  std::vector<sim::SpeedSample> out;
   while (r.next()) {
-    SpeedSample s;
-    s.t = r.time(false);
-    s.speed_mps = r.number(1);
-    if (s.speed_mps < -100.0 || s.speed_mps > 100.0) throw r.error(1, "speed must be within [-100, 100] m/s");
-    out.push_back(s);
+    const double t = r.time(false);
+    out.push_back({t, r.num_if(1, [](double v) { return v >= -100.0 && v <= 100.0; }, "speed must be within [-100, 100] m/s")});
   }
   return out;
 }
 
-inline std::vector<MagSample> read_mag_csv(std::istream& in, const std::string& file) {
-  detail::CsvReader r(in, file, kMagHeader);
-  std::vector<MagSample> out;
+inline std::vector<sim::MagSample> read_mag(const std::filesystem::path& path) {
+  detail::Rows r(path, kMagHeader);
+  std::vector<sim::MagSample> out;
   while (r.next()) {
-    MagSample m;
+    sim::MagSample m;
     m.t = r.time(false);
     m.field_ut = r.vec(1);
-    if (m.field_ut.norm() > 1e4) throw r.error(1, "field magnitude above 10000 uT");
+    if (m.field_ut.norm() > 1e4) r.fail(1, "field magnitude above 10000 uT");
     out.push_back(m);
   }
   return out;
 }
 
-inline std::vector<TruthSample> read_truth_csv(std::istream& in, const std::string& file) {
-  detail::CsvReader r(in, file, kTruthHeader);
-  std::vector<TruthSample> out;
+inline std::vector<sim::TruthSample> read_truth(const std::filesystem::path& path) {
+  detail::Rows r(path, kTruthHeader);
+  std::vector<sim::TruthSample> out;
   while (r.next()) {
-    TruthSample s;
+    sim::TruthSample s;
     s.t = r.time(false);
     s.position = r.vec(1);
     s.velocity = r.vec(4);
-    s.roll = r.number(7);
-    s.pitch = r.number(8);
-    s.yaw = r.number(9);
+    s.roll = r.num(7);
+    s.pitch = r.num(8);
+    s.yaw = r.num(9);
     s.angular_rate = r.vec(10);
     s.specific_force = r.vec(13);
-    s.speed = r.number(16);
-    s.region = static_cast<Region>(r.integer(17, 0, 2));
-    s.scene = static_cast<Scene>(r.integer(18, 0, 2));
-    s.is_static = r.integer(19, 0, 1) == 1;
+    s.speed = r.num(16);
+    s.region = static_cast<sim::Region>(r.integer<int>(17, 0, 2));
+    s.scene = static_cast<sim::Scene>(r.integer<int>(18, 0, 2));
+    s.is_static = r.flag(19);
     out.push_back(s);
   }
   return out;
 }
 
-namespace detail {
-template <class F>
-auto read_file(const std::filesystem::path& path, F&& parse) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw LogError(path.string(), 0, "", "cannot open for reading");
-  return parse(in, path.string());
-}
-}  // namespace detail
-
-/// Reads the seven files of write_drive_logs from dir and links every GNSS epoch to its
-/// satellites (rows of sats.csv with the epoch's time). Throws LogError.
-inline DriveLog read_drive_logs(const std::filesystem::path& dir) {
-  DriveLog log;
-  log.imu = detail::read_file(dir / "imu.csv", [](std::istream& i, const std::string& f) { return read_imu_csv(i, f); });
-  log.gnss = detail::read_file(dir / "gnss.csv", [](std::istream& i, const std::string& f) { return read_gnss_csv(i, f); });
-  log.sats = detail::read_file(dir / "sats.csv", [](std::istream& i, const std::string& f) { return read_sats_csv(i, f); });
-  log.uwb = detail::read_file(dir / "uwb.csv", [](std::istream& i, const std::string& f) { return read_uwb_csv(i, f); });
-  log.speed = detail::read_file(dir / "speed.csv", [](std::istream& i, const std::string& f) { return read_speed_csv(i, f); });
-  log.mag = detail::read_file(dir / "mag.csv", [](std::istream& i, const std::string& f) { return read_mag_csv(i, f); });
-  log.truth = detail::read_file(dir / "truth.csv", [](std::istream& i, const std::string& f) { return read_truth_csv(i, f); });
-  // Satellites belong to the GNSS epoch with the same time; counts must agree.
-  std::size_t k = 0;
+/// Reads the seven files from dir and links every GNSS epoch to its satellites (the rows of
+/// sats.csv with the epoch's time, as many as its num_sats). Throws ParseError.
+inline sim::DriveLog read_drive_logs(const std::filesystem::path& dir) {
+  sim::DriveLog log;
+  log.imu = read_imu(dir / "imu.csv");
+  log.gnss = read_gnss(dir / "gnss.csv");
+  log.sats = read_sats(dir / "sats.csv");
+  log.uwb = read_uwb(dir / "uwb.csv");
+  log.speed = read_speed(dir / "speed.csv");
+  log.mag = read_mag(dir / "mag.csv");
+  log.truth = read_truth(dir / "truth.csv");
+  // Line k + 2 of sats.csv holds row k (after the header); written files have no blank lines.
   const std::string sats_file = (dir / "sats.csv").string();
+  std::size_t k = 0;
   for (auto& e : log.gnss) {
     e.first_sat = k;
     int n = 0;
-    while (k < log.sats.size() && log.sats[k].t == e.t) {
-      ++k;
-      ++n;
-    }
+    for (; k < log.sats.size() && log.sats[k].t == e.t; ++k) ++n;
     if (n != e.num_sats)
-      throw LogError(sats_file, e.first_sat + 2, "t",
-                     "gnss.csv lists " + std::to_string(e.num_sats) + " satellites at t=" + std::to_string(e.t) + " but sats.csv has " +
-                         std::to_string(n));
+      throw ParseError(sats_file, e.first_sat + 2, 1, "t",
+                       cat("gnss.csv lists ", e.num_sats, " satellites at t=", e.t, " but sats.csv has ", n));
   }
   if (k != log.sats.size())
-    throw LogError(sats_file, k + 2, "t", "time " + std::to_string(log.sats[k].t) + " is not an epoch of gnss.csv");
+    throw ParseError(sats_file, k + 2, 1, "t", cat("time ", log.sats[k].t, " is not an epoch of gnss.csv"));
   return log;
 }
 
+}  // namespace sim_csv
+
+/// Writes all seven files into dir (created if needed). Throws std::runtime_error naming
+/// the file that could not be written.
+inline void write_drive_logs(const sim::Drive& d, const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw std::runtime_error(cat(dir.string(), ": cannot create directory: ", ec.message()));
+  for (const auto& name : sim_csv::log_file_names()) {
+    const auto path = dir / name;
+    std::ofstream os(path, std::ios::binary);
+    if (!os) throw std::runtime_error(cat(path.string(), ": cannot open for writing"));
+    sim_csv::write_log(os, d, name);
+    os.flush();
+    if (!os) throw std::runtime_error(cat(path.string(), ": write failed"));
+  }
+}
+
+/// The logs of dir as a recording: sensor messages without truth, exactly sim::sensor_log of
+/// the drive that was written, and the truth and labels apart. The logs hold no true range or
+/// NLOS bias per range (NaN in the UWB labels) and no fix errors (no fix labels).
+inline SimLogs read_sim_logs(const std::filesystem::path& dir) {
+  sim::DriveLog rows = sim_csv::read_drive_logs(dir);
+  SimLogs out;
+  for (const auto& r : rows.uwb)
+    out.truth.uwb.push_back({r.t, r.anchor_id, r.nlos, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()});
+  for (const auto& s : rows.sats) out.truth.sats.push_back({s.t, s.sat_id, s.line_of_sight});
+  out.truth.truth = std::move(rows.truth);
+  // The messages come from the simulator's own conversion (sim/streams.hpp) on a drive that
+  // holds only the logged streams, so that logs and simulator cannot drift apart.
+  sim::Drive d;
+  d.imu = std::move(rows.imu);
+  d.gnss = std::move(rows.gnss);
+  d.sats = std::move(rows.sats);
+  d.uwb = std::move(rows.uwb);
+  d.speed = std::move(rows.speed);
+  d.mag = std::move(rows.mag);
+  out.sensors = sim::sensor_log(d);
+  return out;
+}
+
+}  // namespace ctxfuse::io
+
+namespace ctxfuse::sim {
+// The names of the former sim/log_io.hpp, for the callers not yet on read_sim_logs.
+using LogError = io::ParseError;
+using io::write_drive_logs;
+using io::sim_csv::kGnssHeader;
+using io::sim_csv::kImuHeader;
+using io::sim_csv::kMagHeader;
+using io::sim_csv::kSatsHeader;
+using io::sim_csv::kSpeedHeader;
+using io::sim_csv::kTruthHeader;
+using io::sim_csv::kUwbHeader;
+using io::sim_csv::log_file_names;
+using io::sim_csv::read_drive_logs;
+using io::sim_csv::write_log;
 }  // namespace ctxfuse::sim
