@@ -28,7 +28,8 @@ gen 300 2 test.csv
 "$cli" classify train --data train.csv --kernel rbf --multiclass ovr --probability --folds 4 --model ours.model > train.out 2>&1 \
   || fail "train exited $?: $(cat train.out)"
 head -1 ours.model | grep -q '^ctxfuse-svm 1$' || fail "model does not start with the ctxfuse-svm header"
-grep -q 'cv        4-fold stratified accuracy' train.out || fail "train did not report the cross-validated accuracy"
+grep -q '^cv        accuracy .* (4 contiguous blocks (row order))' train.out || fail "train did not report the blocked cross-validated accuracy"
+grep -q '^cv: fold 4/4, 600 samples scored' train.out || fail "no per-fold progress on stderr"
 "$cli" classify test --model ours.model --data test.csv --json r.json --predictions p.csv > test.out 2>&1 \
   || fail "test exited $?: $(cat test.out)"
 acc=$(sed -n 's/^  "accuracy": \([0-9.]*\),$/\1/p' r.json)
@@ -86,9 +87,85 @@ head -c 700 ours.model > cut.model
 "$cli" classify test --model cut.model --data test.csv > err.out 2>&1
 [ $? -eq 1 ] || fail "truncated model: expected status 1: $(cat err.out)"
 expect_error 1 "missing.csv: cannot open" "$cli" classify test --model ours.model --data missing.csv
-expect_error 2 "unknown option '--bogus'" "$cli" classify train --data train.csv --model x.model --bogus
-expect_error 2 "--kernel: expected linear or rbf" "$cli" classify train --data train.csv --model x.model --kernel poly
-expect_error 2 "test needs --data and --model" "$cli" classify test --data test.csv
+expect_error 2 "not expected: --bogus" "$cli" classify train --data train.csv --model x.model --bogus
+expect_error 2 "--kernel: poly not in {linear,rbf}" "$cli" classify train --data train.csv --model x.model --kernel poly
+expect_error 2 "--model is required" "$cli" classify test --data test.csv
+expect_error 2 "--class-weight" "$cli" classify train --data train.csv --model x.model --class-weight 1:x
+expect_error 1 "--cv groups needs --groups COL" "$cli" classify train --data train.csv --model x.model --cv groups
+
+# 4. --help of every sub-command exits 0 and lists every option with its default.
+help_has() {  # help_has <fragment...> -- <command...>
+  local fragments=()
+  while [ "$1" != "--" ]; do fragments+=("$1"); shift; done
+  shift
+  "$@" > help.out 2>&1 || fail "'$* ' exited $?"
+  for f in "${fragments[@]}"; do grep -qF -- "$f" help.out || fail "'$*' does not list '$f'"; done
+}
+help_has "--pso-samples UINT=2000" "--score" "=accuracy" "--cv" "=auto" "--folds INT" "=5" "--class-weight" "--groups" "--ignore TEXT=[time_s]" -- "$cli" classify train --help
+help_has "--predictions" "--label TEXT=label" "--features" -- "$cli" classify test --help
+help_has "--window FLOAT" "=4" "--cn0-window" "--fill FLOAT=-1" "--labels" "--label-tolerance FLOAT:NONNEGATIVE=0.05" -- "$cli" features gnss --help
+help_has "--open-max-error FLOAT" "=0.6" "--window" "--train-fraction" -- "$cli" features nmea --help
+help_has "--window INT" "=1" "--height-column" -- "$cli" features uwb-static --help
+help_has "--static" "--data" "--out" -- "$cli" features dw1000 --help
+
+# 5. Column selection: named label, chosen features, text columns left alone; classes sorted.
+awk -F, 'BEGIN { OFS = "," } NR == 1 { print "time_s,note,count,cls,snr"; next } { print NR, "x" NR, $3, $1, $2 }' train.csv > cols.csv
+"$cli" classify train --data cols.csv --label cls --features snr,count --model cols.model > cols.out 2>&1 || fail "column selection: $(cat cols.out)"
+grep -q 'features (snr,count)' cols.out || fail "train did not use --features snr,count in order: $(cat cols.out)"
+"$cli" classify train --data train.csv --model plain.model > /dev/null 2>&1
+cmp -s <(tail -n +2 cols.model) <(tail -n +2 plain.model) || fail "--label/--features model differs from the same columns in label,snr,count order"
+expect_error 1 "cols.csv:2: column 'note' (2): expected a number, got 'x2'" "$cli" classify train --data cols.csv --label cls --ignore time_s --model x.model
+awk -F, 'NR == 1 || $1 != 1' train.csv | awk -F, 'BEGIN { OFS = "," } NR == 1 { print; next } { $1 = ($1 == 2 ? 9 : 4); print }' > relabel.csv
+"$cli" classify train --data relabel.csv --model relabel.model > /dev/null 2>&1 || fail "train on labels 9/4 failed"
+"$cli" classify test --data relabel.csv --model relabel.model > relabel.out 2>&1
+grep -q '^true\\pred       4       9$' relabel.out || fail "confusion matrix not labelled in ascending order: $(cat relabel.out)"
+
+# 6. Grouped validation and class weights.
+awk -F, 'BEGIN { OFS = "," } NR == 1 { print $0, "run"; next } { print $0, int((NR - 2) / 100) }' train.csv > groups.csv
+"$cli" classify train --data groups.csv --groups run --folds 0 --pso --pso-swarm 2 --pso-iterations 1 --class-weight auto --score macro-f1 \
+  --model g.model > g.out 2>&1 || fail "grouped PSO: $(cat g.out)"
+grep -q 'folds     leave-one-group-out over 6 groups' g.out || fail "not leave-one-group-out over the 6 runs: $(cat g.out)"
+grep -q '^pso: iteration 1/1, 4 cross-validations, best macro-f1' g.out || fail "no PSO progress: $(cat g.out)"
+grep -q '^weights   1:1 2:1 3:1' g.out || fail "auto weights of three equal classes are not 1: $(cat g.out)"
+
+# 7. features gnss: receiver conventions (rows of one epoch in any order and mix of
+# constellations, -91 / empty / out-of-range geometry) and the label join by time.
+cat > sats.csv <<'CSV'
+time_s,sat_id,elevation_deg,azimuth_deg,cn0_dbhz
+1,G01,20,10,40
+1,R05,-91,,48
+2,E11,60,300,36
+1,E11,60,300,36
+2,G01,20,10,42
+1,G07,40,100,44
+2,R05,-91,0,50
+2,G07,40,400,44
+CSV
+printf 'time_s,label\n1.01,3\n2,5\n7,4\n' > scene_labels.csv
+"$cli" features gnss --sats sats.csv --labels scene_labels.csv --out feat.csv 2> feat.err || fail "features gnss: $(cat feat.err)"
+grep -q '2 epochs .* 3 tracked satellite rows without geometry .* 2 labelled, 0 without a label' feat.err \
+  || fail "features gnss did not report the rows without geometry / the join: $(cat feat.err)"
+# t = 1: 4 satellites, mean C/N0 42, mean elevation of G01/G07/E11 = 40, vacancy of azimuths 10, 100, 300 = 200.
+# t = 2: G07's azimuth 400 is out of range: geometry only for G01 and E11.
+head -1 feat.csv | grep -q '^time_s,label,satellite_count,pdop,mean_cn0_dbhz' || fail "feature header: $(head -1 feat.csv)"
+awk -F, 'NR == 2 && !($2 == 3 && $3 == 4 && $5 == 42 && $9 == 40 && $10 == 200) { exit 1 }
+         NR == 3 && !($2 == 5 && $3 == 4 && $9 == 40) { exit 1 }' feat.csv || fail "features of the hand-computed epochs: $(cat feat.csv)"
+"$cli" classify train --data feat.csv --features satellite_count,mean_cn0_dbhz --model f.model > /dev/null 2>&1 \
+  || fail "features gnss output does not feed classify"
+
+# 8. features dw1000: the manual's formulas, checked with awk.
+printf 'label,range_m,fp_amp1,fp_amp2,fp_amp3,cir_power,rxpacc,std_noise,prf_mhz,other\n1,10.5,14305,15276,14270,6491,230,52,64,x\n0,3,9000,8000,7000,3000,1000,40,16,y\n' > dw.csv
+"$cli" features dw1000 --data dw.csv --out dw_feat.csv > dw.out 2>&1 || fail "features dw1000: $(cat dw.out)"
+head -1 dw_feat.csv | grep -qx 'label,rx_power_dbm,fp_power_dbm,rx_minus_fp_db,noise_dbm,range_m' || fail "dw1000 header: $(head -1 dw_feat.csv)"
+paste -d, <(tail -n +2 dw.csv) <(tail -n +2 dw_feat.csv) | awk -F, '
+  function db(x) { return 10 * log(x) / log(10) }
+  { a = ($9 == 16 ? 113.77 : 121.74); n2 = $7 * $7
+    e[1] = db($6 * 131072 / n2) - a; e[2] = db(($3 * $3 + $4 * $4 + $5 * $5) / n2) - a; e[3] = e[1] - e[2]
+    e[4] = db($8 * $8 / n2) - a; e[5] = $2
+    if ($11 != $1) bad++
+    for (k = 1; k <= 5; ++k) { d = e[k] - $(11 + k); if (d < 0) d = -d; if (d > 1e-6) bad++ } }
+  END { exit bad > 0 }' || fail "dw1000 features differ from the manual's formulas: $(cat dw_feat.csv)"
+expect_error 2 "give --data CSV or --static DIR" "$cli" features dw1000 --out x.csv
 
 if [ "$failures" -ne 0 ]; then
   echo "$failures check(s) failed"

@@ -141,4 +141,64 @@ TEST(GnssScene, WindowDropsEpochsOlderThanFourSeconds) {
   EXPECT_DOUBLE_EQ(f[F::count_std], 0.0);
 }
 
+TEST(GnssScene, UnknownGeometryCountsInCn0FeaturesOnly) {
+  GnssSceneExtractor<16, 8> ex;
+  GnssSceneFeatures f;
+  // Satellites 3 (elevation and azimuth unknown) and 5 (azimuth unknown) are tracked without
+  // geometry: they count in the satellite count and the C/N0 features only.
+  const std::vector<SatelliteObservation> e0{
+      {1, 20, 10, 40}, {2, 40, 100, 44}, {3, kNaN, kNaN, 48}, {4, 60, 300, 36}, {5, 30, kNaN, 50}};
+  ASSERT_EQ(ex.push({0.0, e0}, f), GnssFeatureStatus::ok);
+  EXPECT_EQ(f[F::satellite_count], 5);
+  EXPECT_DOUBLE_EQ(f[F::mean_cn0], (40 + 44 + 48 + 36 + 50) / 5.0);
+  EXPECT_DOUBLE_EQ(f[F::mean_elevation], (20 + 40 + 60) / 3.0);
+  EXPECT_DOUBLE_EQ(f[F::azimuth_vacancy], 200.0);  // azimuths 10, 100, 300 as above
+  EXPECT_EQ(f[F::pdop], -1.0);                     // 3 satellites with geometry: no PDOP
+  // t = 1: satellite 3 at 50 dB-Hz: its C/N0 std {48, 50} = 1 counts; the others unchanged (0).
+  std::vector<SatelliteObservation> e1 = e0;
+  e1[2].cn0_dbhz = 50;
+  ASSERT_EQ(ex.push({1.0, e1}, f), GnssFeatureStatus::ok);
+  EXPECT_NEAR(f[F::mean_cn0_std], 1.0 / 5.0, 1e-12);
+  // With a fourth satellite of known geometry the computed PDOP is that of the four only.
+  const std::vector<SatelliteObservation> known{{1, 90, 0, 40}, {2, 0, 0, 40}, {3, 0, 120, 40}, {4, 0, 240, 40}};
+  std::vector<SatelliteObservation> mixed = known;
+  mixed.push_back({9, kNaN, 45, 40});
+  ASSERT_EQ(ex.push({2.0, mixed}, f), GnssFeatureStatus::ok);
+  EXPECT_NEAR(f[F::pdop], std::sqrt(8.0 / 3.0), 1e-12);
+  EXPECT_EQ(f[F::satellite_count], 5);
+  // Infinite values are still errors; only NaN means unknown.
+  const std::vector<SatelliteObservation> inf_el{{1, std::numeric_limits<double>::infinity(), 10, 40}};
+  EXPECT_EQ(ex.push({3.0, inf_el}, f), GnssFeatureStatus::invalid_elevation);
+}
+
+// The same sky sampled at 1 Hz and 5 Hz: C/N0 and satellite count change once per second (value
+// of second ceil(t)), so at whole seconds every window in seconds holds the same values, 5 times
+// each at 5 Hz. Windows counted in epochs would cover 0.8 s at 5 Hz and differ.
+std::vector<SatelliteObservation> sky(double t) {
+  const int k = static_cast<int>(std::ceil(t - 1e-9));
+  std::vector<SatelliteObservation> s{{1, 20, 10, 40.0 + (k % 3)}, {2, 40, 100, 44.0 - (k % 4)}, {3, 60, 300, 38.0 + (k % 5)},
+                                      {4, 35, 200, 42.0}};
+  if (k % 2 == 0) s.push_back({5, 15, 250, 30.0 + k % 7});
+  return s;
+}
+
+TEST(GnssScene, WindowsInSecondsMatchAt1And5Hz) {
+  GnssSceneExtractor<8, 32> slow, fast;
+  GnssSceneFeatures fs, ff;
+  int compared = 0;
+  for (int step = 1; step <= 5 * 20; ++step) {
+    const double t = 0.2 * step;
+    const auto sats = sky(t);
+    ASSERT_EQ(fast.push({t, sats}, ff), GnssFeatureStatus::ok);
+    if (step % 5 != 0) continue;
+    ASSERT_EQ(slow.push({t, sats}, fs), GnssFeatureStatus::ok);
+    if (t < 4.0) continue;  // both windows full
+    for (int k = 0; k < kGnssSceneFeatureCount; ++k) EXPECT_NEAR(ff[k], fs[k], 1e-12) << "feature " << k << " at t " << t;
+    ++compared;
+  }
+  EXPECT_EQ(compared, 17);
+  EXPECT_GT(fs[F::mean_cn0_std], 0.1);  // the windows do see variation
+  EXPECT_GT(fs[F::count_std], 0.1);
+}
+
 }  // namespace

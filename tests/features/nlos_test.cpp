@@ -1,6 +1,7 @@
 // UWB NLOS features against hand-computed values.
 #include <gtest/gtest.h>
 
+#include <ctxfuse/features/dw1000.hpp>
 #include <ctxfuse/features/nlos.hpp>
 
 #include <cmath>
@@ -71,6 +72,49 @@ TEST(RangeWindowFeatures, CausalMeanAndStd) {
   EXPECT_FALSE(w.push(-std::numeric_limits<double>::infinity(), -80, -80, o));
   EXPECT_EQ(o.residual_mean_m, before.residual_mean_m);
   EXPECT_THROW(RangeWindowFeatures<8>(9), std::invalid_argument);
+}
+
+TEST(Dw1000Features, ManualFormulasByHand) {
+  // First data row of the Hanyang recording LOS/height_50.0cm/10m.csv.
+  Dw1000Diagnostics d;
+  d.range_m = 10.168694;
+  d.fp_amp1 = 14305, d.fp_amp2 = 15276, d.fp_amp3 = 14270;
+  d.cir_power = 6491, d.rxpacc = 230, d.std_noise = 52;
+  Dw1000Features f;
+  ASSERT_EQ(dw1000_features(d, f), Dw1000Status::ok);
+  // 6491 * 2^17 = 850788352; / 230^2 = 16082.956...; 10 log10 = 42.0637; - 121.74
+  EXPECT_NEAR(f.rx_power_dbm, 10.0 * std::log10(850788352.0 / 52900.0) - 121.74, 1e-12);
+  EXPECT_NEAR(f.rx_power_dbm, -79.68, 0.005);  // the chip's RSSI logged on that row
+  // 14305^2 + 15276^2 + 14270^2 = 641622101
+  EXPECT_NEAR(f.fp_power_dbm, 10.0 * std::log10(641622101.0 / 52900.0) - 121.74, 1e-12);
+  EXPECT_NEAR(f.rx_minus_fp_db, f.rx_power_dbm - f.fp_power_dbm, 1e-12);
+  EXPECT_NEAR(f.noise_dbm, 10.0 * std::log10(2704.0 / 52900.0) - 121.74, 1e-12);
+  EXPECT_EQ(f.range_m, d.range_m);
+  // 16 MHz PRF: the constant 113.77 instead of 121.74, so every power rises by 7.97 dB.
+  Dw1000Diagnostics d16 = d;
+  d16.prf_mhz = 16;
+  Dw1000Features f16;
+  ASSERT_EQ(dw1000_features(d16, f16), Dw1000Status::ok);
+  EXPECT_NEAR(f16.rx_power_dbm - f.rx_power_dbm, 7.97, 1e-9);
+  EXPECT_NEAR(f16.rx_minus_fp_db, f.rx_minus_fp_db, 1e-9);
+  // A doubled preamble accumulation with doubled amplitudes (C scales with N^2) is the same frame.
+  Dw1000Diagnostics twice = d;
+  twice.rxpacc *= 2, twice.fp_amp1 *= 2, twice.fp_amp2 *= 2, twice.fp_amp3 *= 2, twice.cir_power *= 4, twice.std_noise *= 2;
+  Dw1000Features f2;
+  ASSERT_EQ(dw1000_features(twice, f2), Dw1000Status::ok);
+  for (std::size_t k = 0; k < kDw1000FeatureCount; ++k) EXPECT_NEAR(f2.values()[k], f.values()[k], 1e-9) << kDw1000FeatureNames[k];
+  // Rejections leave `out` alone.
+  const auto before = f.values();
+  Dw1000Diagnostics bad = d;
+  bad.prf_mhz = 32;
+  EXPECT_EQ(dw1000_features(bad, f), Dw1000Status::invalid_prf);
+  bad = d, bad.rxpacc = 0;
+  EXPECT_EQ(dw1000_features(bad, f), Dw1000Status::invalid_rxpacc);
+  bad = d, bad.cir_power = 0;
+  EXPECT_EQ(dw1000_features(bad, f), Dw1000Status::non_positive_power);
+  bad = d, bad.fp_amp2 = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(dw1000_features(bad, f), Dw1000Status::non_finite_input);
+  EXPECT_EQ(f.values(), before);
 }
 
 }  // namespace

@@ -4,14 +4,21 @@
 
 #include <ctxfuse/classify/svm.hpp>
 #include <ctxfuse/classify/svm_train.hpp>
+#include <ctxfuse/features/dw1000.hpp>
 #include <ctxfuse/features/gnss_scene.hpp>
 #include <ctxfuse/features/nlos.hpp>
 #include <ctxfuse/io/nmea.hpp>
 #include <ctxfuse/features/scene_label.hpp>
 #include <ctxfuse/io/uwb_static.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <map>
+#include <sstream>
+#include <string>
 #include <numbers>
 #include <vector>
 
@@ -128,6 +135,66 @@ TEST(RealData, HanyangStaticNlosSplitReachesTarget) {
   EXPECT_GE(double(tp) / double(tp + fp), 0.85);  // NLOS precision
   EXPECT_GE(double(tp) / double(tp + fn), 0.80);  // NLOS recall
   RecordProperty("accuracy", std::to_string(accuracy));
+}
+
+// The Hanyang static recordings log the chip's RSSI and first-path RSSI beside the registers,
+// both rounded to 0.01 dB. The manual's received-power formula reproduces RSSI within that
+// rounding. The logged first-path RSSI is not the manual's formula: it equals it with FP_AMPL2
+// in place of FP_AMPL3 (the logger squared the second amplitude twice), within the rounding.
+TEST(RealData, HanyangDw1000PowersReproduceTheLoggedRssi) {
+  CTXFUSE_REQUIRE_DATA(root, "uwb-outdoor-hanyang/Static_measurements");
+  std::size_t rows = 0, rx_off = 0, fp_logger_off = 0, fp_manual_within = 0;
+  std::vector<double> manual_fp_error;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(root)) {
+    if (entry.path().extension() != ".csv") continue;
+    std::ifstream in(entry.path());
+    std::string line;
+    ASSERT_TRUE(std::getline(in, line)) << entry.path();
+    const auto split = [](const std::string& l) {
+      std::vector<std::string> f;
+      std::stringstream ss(l);
+      for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+      return f;
+    };
+    const auto names = split(line);
+    const auto col = [&](const char* n) { return static_cast<std::size_t>(std::find(names.begin(), names.end(), n) - names.begin()); };
+    const std::size_t c_f1 = col("FirstPathAmp1"), c_f2 = col("FirstPathAmp2"), c_f3 = col("FirstPathAmp3"),
+                      c_cir = col("Max Growth CIR"), c_n = col("Rx Preamble Count"), c_rssi = col("RSSI(dBm)"),
+                      c_fp = col("RSSI_fp(dBm)");
+    ASSERT_LT(std::max({c_f1, c_f2, c_f3, c_cir, c_n, c_rssi, c_fp}), names.size()) << entry.path();
+    while (std::getline(in, line)) {
+      const auto fields = split(line);
+      std::vector<double> v;
+      for (const auto& x : fields) {
+        char* end = nullptr;
+        v.push_back(std::strtod(x.c_str(), &end));
+        if (end == x.c_str() || *end != '\0') v.back() = std::nan("");
+      }
+      if (std::isnan(v[0])) break;  // the summary block ("Distance Mean,...")
+      if (v.size() != names.size() || std::isnan(v[c_f1] + v[c_f2] + v[c_f3] + v[c_cir] + v[c_n])) continue;  // a corrupted row
+      if (!std::isfinite(v[c_rssi]) || !std::isfinite(v[c_fp])) continue;  // the chip's -inf
+      ++rows;
+      const double rx = dw1000_rx_power_dbm(v[c_cir], v[c_n], 64.0);
+      const double fp_manual = dw1000_first_path_power_dbm(v[c_f1], v[c_f2], v[c_f3], v[c_n], 64.0);
+      const double fp_logger = dw1000_first_path_power_dbm(v[c_f1], v[c_f2], v[c_f2], v[c_n], 64.0);
+      const double rounding = 0.005 + 1e-4;  // half the logged 0.01 dB, plus single-precision arithmetic
+      rx_off += std::abs(rx - v[c_rssi]) > rounding;
+      fp_logger_off += std::abs(fp_logger - v[c_fp]) > rounding;
+      fp_manual_within += std::abs(fp_manual - v[c_fp]) <= rounding;
+      manual_fp_error.push_back(fp_manual - v[c_fp]);
+    }
+  }
+  EXPECT_GT(rows, 60000u);
+  // At most 1 row in 10,000 off (rows whose registers and powers were logged from different frames).
+  EXPECT_LE(rx_off * 10000, rows) << rx_off << " of " << rows;
+  EXPECT_LE(fp_logger_off * 10000, rows) << fp_logger_off << " of " << rows;
+  // The manual's first-path power is a different quantity than the logged one.
+  EXPECT_LT(fp_manual_within * 100, rows);
+  std::nth_element(manual_fp_error.begin(), manual_fp_error.begin() + static_cast<std::ptrdiff_t>(manual_fp_error.size() / 2), manual_fp_error.end());
+  RecordProperty("rows", std::to_string(rows));
+  RecordProperty("rx_off", std::to_string(rx_off));
+  RecordProperty("fp_logger_off", std::to_string(fp_logger_off));
+  RecordProperty("median_manual_fp_minus_logged_db", std::to_string(manual_fp_error[manual_fp_error.size() / 2]));
 }
 
 }  // namespace

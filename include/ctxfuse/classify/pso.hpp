@@ -43,11 +43,19 @@ inline double uniform01(std::mt19937_64& rng) {
 }
 }  // namespace pso_detail
 
+/// Does nothing: the default per-iteration observer.
+struct PsoNoObserver {
+  template <class Result>
+  void operator()(int, const Result&) const {}
+};
+
 /// Minimises f over the box [lower, upper]. f(x) returning NaN counts as +infinity. Positions
-/// that leave the box are clamped to it and their velocity component zeroed.
-template <int N, class F>
+/// that leave the box are clamped to it and their velocity component zeroed. `observe(it,
+/// result)` is called after the initial swarm (it = 0) and after each iteration (it = 1 ..
+/// iterations) with the best found so far.
+template <int N, class F, class Observer = PsoNoObserver>
 PsoResult<N> pso_minimize(F&& f, const Eigen::Matrix<double, N, 1>& lower, const Eigen::Matrix<double, N, 1>& upper,
-                          const PsoOptions& options = {}) {
+                          const PsoOptions& options = {}, Observer&& observe = {}) {
   using Vec = Eigen::Matrix<double, N, 1>;
   if (options.swarm_size < 1 || options.iterations < 0) throw std::invalid_argument("pso: swarm_size >= 1 and iterations >= 0 required");
   if (!lower.allFinite() || !upper.allFinite() || (upper.array() < lower.array()).any())
@@ -77,6 +85,7 @@ PsoResult<N> pso_minimize(F&& f, const Eigen::Matrix<double, N, 1>& lower, const
       result.best_position = position[i];
     }
   }
+  observe(0, result);
   for (int it = 0; it < options.iterations; ++it) {
     const double t = options.iterations > 1 ? static_cast<double>(it) / (options.iterations - 1) : 0.0;
     const double w = options.inertia + t * (options.final_inertia - options.inertia);
@@ -104,15 +113,21 @@ PsoResult<N> pso_minimize(F&& f, const Eigen::Matrix<double, N, 1>& lower, const
         }
       }
     }
+    observe(it + 1, result);
   }
   return result;
 }
 
-/// Maximises f over the box; best_value is the maximum found.
-template <int N, class F>
+/// Maximises f over the box; best_value is the maximum found (also in what `observe` sees).
+template <int N, class F, class Observer = PsoNoObserver>
 PsoResult<N> pso_maximize(F&& f, const Eigen::Matrix<double, N, 1>& lower, const Eigen::Matrix<double, N, 1>& upper,
-                          const PsoOptions& options = {}) {
-  auto r = pso_minimize<N>([&](const Eigen::Matrix<double, N, 1>& x) { return -f(x); }, lower, upper, options);
+                          const PsoOptions& options = {}, Observer&& observe = {}) {
+  const auto flipped = [&](int it, const PsoResult<N>& r) {
+    PsoResult<N> shown = r;
+    shown.best_value = -r.best_value;
+    observe(it, shown);
+  };
+  auto r = pso_minimize<N>([&](const Eigen::Matrix<double, N, 1>& x) { return -f(x); }, lower, upper, options, flipped);
   r.best_value = -r.best_value;
   return r;
 }

@@ -1,6 +1,7 @@
 // Training SVMs through libsvm (C-SVC), with the input standardisation fitted on the training
 // data, one-vs-one (libsvm's own) or one-vs-rest (k binary libsvm machines) layouts, stratified
-// k-fold cross-validation and a particle-swarm search over (log2 C, log2 gamma).
+// k-fold cross-validation and a particle-swarm search over (log2 C, log2 gamma); those two are in
+// svm_tune.hpp, included at the end.
 //
 // This is the only ctxfuse header that includes <svm.h>; link LibSVM::LibSVM to use it.
 // Training allocates freely. libsvm draws random numbers from rand() (probability fitting and
@@ -25,8 +26,8 @@
 #include <utility>
 #include <vector>
 
-#include "ctxfuse/classify/pso.hpp"
 #include "ctxfuse/classify/svm.hpp"
+#include "ctxfuse/classify/svm_folds.hpp"
 
 namespace ctxfuse::classify {
 
@@ -181,14 +182,6 @@ std::pair<Eigen::Matrix<double, Dim, 1>, Eigen::Matrix<double, Dim, 1>> fit_stan
   return {mean, std_dev};
 }
 
-/// Distinct labels in order of first appearance (libsvm's class order).
-inline std::vector<int> labels_in_order(std::span<const int> y) {
-  std::vector<int> out;
-  for (int v : y)
-    if (std::find(out.begin(), out.end(), v) == out.end()) out.push_back(v);
-  return out;
-}
-
 /// Trains a model. Throws std::invalid_argument for unusable data or options (sizes differ,
 /// NaN/Inf features, fewer than two or more than MaxClasses classes, C <= 0, ...).
 template <int Dim, int MaxClasses = 8>
@@ -275,144 +268,7 @@ SvmModel<Dim, MaxClasses> train_svm(const SvmFeatures<Dim>& x, std::span<const i
   return model;
 }
 
-/// Fold index (0..folds-1) of every sample: each class's samples are shuffled with the seed and
-/// dealt round-robin, so every fold holds each class in proportion.
-inline std::vector<int> stratified_folds(std::span<const int> y, int folds, std::uint64_t seed) {
-  if (folds < 2) throw std::invalid_argument("stratified_folds: need at least 2 folds");
-  std::mt19937_64 rng(seed);
-  std::vector<int> fold(y.size(), 0);
-  int next_fold = 0;
-  for (int label : labels_in_order(y)) {
-    std::vector<std::size_t> members;
-    for (std::size_t i = 0; i < y.size(); ++i)
-      if (y[i] == label) members.push_back(i);
-    // Fisher-Yates with our own bounded draw: the order is the same with every standard library.
-    for (std::size_t i = members.size(); i > 1; --i) {
-      const auto j = static_cast<std::size_t>(rng() % i);
-      std::swap(members[i - 1], members[j]);
-    }
-    for (std::size_t i : members) {
-      fold[i] = next_fold;
-      next_fold = (next_fold + 1) % folds;
-    }
-  }
-  return fold;
-}
-
-/// True for the samples of a stratified test split of about `test_fraction` of each class.
-inline std::vector<bool> stratified_split(std::span<const int> y, double test_fraction, std::uint64_t seed) {
-  if (!(test_fraction > 0.0 && test_fraction < 1.0)) throw std::invalid_argument("stratified_split: test_fraction must be in (0, 1)");
-  std::mt19937_64 rng(seed);
-  std::vector<bool> is_test(y.size(), false);
-  for (int label : labels_in_order(y)) {
-    std::vector<std::size_t> members;
-    for (std::size_t i = 0; i < y.size(); ++i)
-      if (y[i] == label) members.push_back(i);
-    for (std::size_t i = members.size(); i > 1; --i) std::swap(members[i - 1], members[static_cast<std::size_t>(rng() % i)]);
-    const auto n_test = static_cast<std::size_t>(std::llround(test_fraction * static_cast<double>(members.size())));
-    for (std::size_t i = 0; i < n_test; ++i) is_test[members[i]] = true;
-  }
-  return is_test;
-}
-
-/// Rows of x (and y) whose mask entry equals `keep`.
-template <int Dim>
-std::pair<SvmFeatures<Dim>, std::vector<int>> select_rows(const SvmFeatures<Dim>& x, std::span<const int> y,
-                                                          const std::vector<int>& group, int wanted, bool equal) {
-  std::vector<Eigen::Index> rows;
-  for (std::size_t i = 0; i < group.size(); ++i)
-    if ((group[i] == wanted) == equal) rows.push_back(static_cast<Eigen::Index>(i));
-  SvmFeatures<Dim> out(static_cast<Eigen::Index>(rows.size()), Dim);
-  std::vector<int> labels(rows.size());
-  for (std::size_t r = 0; r < rows.size(); ++r) {
-    out.row(static_cast<Eigen::Index>(r)) = x.row(rows[r]);
-    labels[r] = y[static_cast<std::size_t>(rows[r])];
-  }
-  return {std::move(out), std::move(labels)};
-}
-
-struct SvmCrossValidation {
-  double accuracy = 0.0;       // fraction of samples predicted right
-  std::vector<int> predicted;  // out-of-fold prediction per sample
-};
-
-/// Stratified k-fold cross-validation; each fold's model (standardisation included) is fitted on
-/// the other folds only.
-template <int Dim, int MaxClasses = 8>
-SvmCrossValidation cross_validate_svm(const SvmFeatures<Dim>& x, std::span<const int> y, const SvmTrainOptions& options,
-                                      int folds, std::uint64_t seed) {
-  if (static_cast<std::size_t>(x.rows()) != y.size()) throw std::invalid_argument("cross_validate_svm: sizes differ");
-  const auto fold = stratified_folds(y, folds, seed);
-  SvmCrossValidation result;
-  result.predicted.assign(y.size(), 0);
-  std::size_t correct = 0;
-  for (int f = 0; f < folds; ++f) {
-    auto [train_x, train_y] = select_rows<Dim>(x, y, fold, f, false);
-    if (train_y.empty() || labels_in_order(train_y).size() < 2) continue;
-    const auto model = train_svm<Dim, MaxClasses>(train_x, train_y, options);
-    SvmPrediction<MaxClasses> out;
-    for (std::size_t i = 0; i < y.size(); ++i) {
-      if (fold[i] != f) continue;
-      const Eigen::Matrix<double, Dim, 1> xi = x.row(static_cast<Eigen::Index>(i)).transpose();
-      svm_predict(model, xi, out);
-      result.predicted[i] = out.label;
-      correct += out.label == y[i] ? 1 : 0;
-    }
-  }
-  result.accuracy = y.empty() ? 0.0 : static_cast<double>(correct) / static_cast<double>(y.size());
-  return result;
-}
-
-struct SvmTuneOptions {
-  // Search box in log2 units, the usual libsvm grid.py range.
-  double log2_c_min = -5.0, log2_c_max = 15.0;
-  double log2_gamma_min = -15.0, log2_gamma_max = 3.0;
-  int folds = 5;
-  std::uint64_t fold_seed = 1;
-  PsoOptions pso{.swarm_size = 10, .iterations = 10};
-};
-
-struct SvmTuneResult {
-  double C = 1.0;
-  double gamma = 0.0;       // 0 for the linear kernel
-  double cv_accuracy = 0.0;  // best cross-validated accuracy found
-  int evaluations = 0;      // cross-validations run
-};
-
-/// PSO over (log2 C, log2 gamma) (log2 C only for the linear kernel) maximising stratified
-/// k-fold accuracy, as the region-recognition paper tunes its SVM. Probability fitting is off
-/// during the search (it does not change the labels' decision function much and costs 5x).
-template <int Dim, int MaxClasses = 8>
-SvmTuneResult tune_svm_pso(const SvmFeatures<Dim>& x, std::span<const int> y, SvmTrainOptions base,
-                           const SvmTuneOptions& tune = {}) {
-  base.probability = false;
-  SvmTuneResult result;
-  if (base.kernel == SvmKernel::linear) {
-    const auto objective = [&](const Eigen::Matrix<double, 1, 1>& p) {
-      SvmTrainOptions o = base;
-      o.C = std::exp2(p[0]);
-      return cross_validate_svm<Dim, MaxClasses>(x, y, o, tune.folds, tune.fold_seed).accuracy;
-    };
-    const auto r = pso_maximize<1>(objective, Eigen::Matrix<double, 1, 1>(tune.log2_c_min),
-                                   Eigen::Matrix<double, 1, 1>(tune.log2_c_max), tune.pso);
-    result.C = std::exp2(r.best_position[0]);
-    result.cv_accuracy = r.best_value;
-    result.evaluations = r.evaluations;
-  } else {
-    const auto objective = [&](const Eigen::Vector2d& p) {
-      SvmTrainOptions o = base;
-      o.C = std::exp2(p[0]);
-      o.gamma = std::exp2(p[1]);
-      return cross_validate_svm<Dim, MaxClasses>(x, y, o, tune.folds, tune.fold_seed).accuracy;
-    };
-    const auto r = pso_maximize<2>(objective, Eigen::Vector2d(tune.log2_c_min, tune.log2_gamma_min),
-                                   Eigen::Vector2d(tune.log2_c_max, tune.log2_gamma_max), tune.pso);
-    result.C = std::exp2(r.best_position[0]);
-    result.gamma = std::exp2(r.best_position[1]);
-    result.cv_accuracy = r.best_value;
-    result.evaluations = r.evaluations;
-  }
-  return result;
-}
-
 }  // namespace ctxfuse::classify
+
+// Cross-validation and the parameter search (they need train_svm above).
+#include "ctxfuse/classify/svm_tune.hpp"

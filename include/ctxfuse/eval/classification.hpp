@@ -1,5 +1,6 @@
-// Classification scores: a confusion matrix with accuracy, per-class precision, recall and F1.
-// Classes are 0 .. n-1; rows are the true class, columns the predicted class.
+// Classification scores: a confusion matrix with accuracy, balanced accuracy, macro-F1 and
+// per-class precision, recall and F1. Classes are 0 .. n-1; rows are the true class, columns the
+// predicted class.
 #pragma once
 
 #include <cstddef>
@@ -59,6 +60,33 @@ class ConfusionMatrix {
     std::size_t diag = 0;
     for (int k = 0; k < n_; ++k) diag += count(k, k);
     return static_cast<double>(diag) / static_cast<double>(total_);
+  }
+  /// Mean recall over the classes that occur (support > 0); NaN when empty. Equals accuracy when
+  /// every class has the same support, and 1/k for a classifier that always answers one class.
+  double balanced_accuracy() const {
+    double sum = 0.0;
+    int classes = 0;
+    for (int k = 0; k < n_; ++k)
+      if (support(k) > 0) {
+        sum += recall(k);
+        ++classes;
+      }
+    return classes == 0 ? std::numeric_limits<double>::quiet_NaN() : sum / classes;
+  }
+  /// Mean F1 over the classes that occur; a class that occurs but is never predicted right
+  /// counts 0 (F1 = 2 TP / (2 TP + FP + FN)). NaN when empty.
+  double macro_f1() const {
+    double sum = 0.0;
+    int classes = 0;
+    for (int k = 0; k < n_; ++k) {
+      const auto sup = support(k);
+      if (sup == 0) continue;
+      const double tp = static_cast<double>(count(k, k));
+      const double fp = static_cast<double>(predicted_count(k)) - tp, fn = static_cast<double>(sup) - tp;
+      sum += 2.0 * tp / (2.0 * tp + fp + fn);
+      ++classes;
+    }
+    return classes == 0 ? std::numeric_limits<double>::quiet_NaN() : sum / classes;
   }
   /// TP / (TP + FP) for class k; NaN when nothing was predicted as k.
   double precision(int k) const {

@@ -4,14 +4,20 @@
 // Conventions (the paper leaves these open):
 // - A satellite counts when its C/N0 is finite (it is tracked); satellites listed in view
 //   without C/N0 are ignored by every feature.
+// - Unknown geometry: a tracked satellite whose elevation or azimuth is NaN (receivers report
+//   -91 or leave the field empty before the almanac is known; readers map that to NaN) counts in
+//   the satellite count and the C/N0 features (3, 4, 6) and is left out of the mean elevation,
+//   the azimuth vacancy and the PDOP computed from geometry (7, 8, 2 without receiver PDOP).
 // - PDOP: the receiver's value when given (finite); otherwise computed from the counted
 //   satellites' elevation/azimuth with one common receiver clock (rows [cos e sin a,
 //   cos e cos a, sin e, 1]); needs >= 4 satellites and a well-conditioned geometry, else fill.
-// - Window statistics (features 4, 5) are population standard deviations (1/n) over the epochs
-//   with time in (t - window, t], the current epoch included; at most WindowCapacity epochs.
+// - Every window is in seconds, so receivers at 1 Hz and 5 Hz get comparable features; the
+//   defaults (4 s) are the paper's 4 epochs at 1 Hz. Window statistics (features 4, 5) are
+//   population standard deviations (1/n) over the epochs with time in (t - window_s, t], the
+//   current epoch included; at most WindowCapacity epochs (the oldest are dropped beyond that).
 // - Feature 6: for every counted satellite of the current epoch, the population std of its C/N0
-//   over the last `cn0_epochs` epochs (by epoch, the current one included) in which it was
-//   tracked; satellites with fewer than 2 values are skipped; the mean over the rest.
+//   over the epochs with time in (t - cn0_window_s, t] in which it was tracked; satellites with
+//   fewer than 2 values are skipped; the mean over the rest.
 // - Feature 8 (azimuth vacancy): largest azimuth gap [deg] between consecutive satellites with
 //   elevation in [10, 60] deg, the gap across 0/360 included. 0 or 1 such satellites: 360.
 // - An epoch with no tracked satellite (indoors, or a missing epoch given as empty) gets count 0
@@ -39,8 +45,8 @@ namespace ctxfuse::features {
 
 struct SatelliteObservation {
   int id = 0;                 // stable across epochs (e.g. system * 1000 + PRN)
-  double elevation_deg = 0.0;
-  double azimuth_deg = 0.0;
+  double elevation_deg = 0.0;  // NaN: unknown (no geometry)
+  double azimuth_deg = 0.0;    // NaN: unknown (no geometry)
   double cn0_dbhz = std::numeric_limits<double>::quiet_NaN();  // NaN: in view, not tracked
 };
 
@@ -68,8 +74,8 @@ inline constexpr std::array<std::string_view, kGnssSceneFeatureCount> kGnssScene
 using GnssSceneFeatures = std::array<double, kGnssSceneFeatureCount>;
 
 struct GnssSceneConfig {
-  double window_s = 4.0;
-  int cn0_epochs = 4;
+  double window_s = 4.0;      // features 4, 5
+  double cn0_window_s = 4.0;  // feature 6
   double vacancy_min_elevation_deg = 10.0;
   double vacancy_max_elevation_deg = 60.0;
   double fill_value = -1.0;
@@ -82,8 +88,8 @@ enum class GnssFeatureStatus {
   non_finite_time,
   time_not_increasing,
   too_many_satellites,
-  invalid_elevation,   // not finite or outside [-90, 90]
-  invalid_azimuth,     // not finite
+  invalid_elevation,   // infinite or outside [-90, 90] (NaN is allowed: unknown)
+  invalid_azimuth,     // infinite (NaN is allowed: unknown)
   invalid_cn0,         // negative or above 100 dB-Hz (NaN is allowed: not tracked)
   invalid_pdop,        // given but negative or zero
   duplicate_satellite,
@@ -95,8 +101,8 @@ constexpr std::string_view describe(GnssFeatureStatus s) {
     case GnssFeatureStatus::non_finite_time: return "epoch time is NaN or Inf";
     case GnssFeatureStatus::time_not_increasing: return "epoch time not after the previous epoch";
     case GnssFeatureStatus::too_many_satellites: return "more satellites than the extractor's capacity";
-    case GnssFeatureStatus::invalid_elevation: return "satellite elevation not finite or outside [-90, 90] deg";
-    case GnssFeatureStatus::invalid_azimuth: return "satellite azimuth not finite";
+    case GnssFeatureStatus::invalid_elevation: return "satellite elevation infinite or outside [-90, 90] deg";
+    case GnssFeatureStatus::invalid_azimuth: return "satellite azimuth infinite";
     case GnssFeatureStatus::invalid_cn0: return "satellite C/N0 outside [0, 100] dB-Hz";
     case GnssFeatureStatus::invalid_pdop: return "PDOP given but not positive";
     case GnssFeatureStatus::duplicate_satellite: return "satellite id listed twice in one epoch";
@@ -104,13 +110,16 @@ constexpr std::string_view describe(GnssFeatureStatus s) {
   return "unknown";
 }
 
-/// PDOP from elevation/azimuth of the given satellites (single receiver clock); NaN when fewer
-/// than 4 satellites or the geometry matrix is singular.
+/// True when the satellite's elevation and azimuth are both known.
+inline bool has_geometry(const SatelliteObservation& s) { return std::isfinite(s.elevation_deg) && std::isfinite(s.azimuth_deg); }
+
+/// PDOP from elevation/azimuth of the tracked satellites with known geometry (single receiver
+/// clock); NaN when fewer than 4 such satellites or the geometry matrix is singular.
 inline double pdop_from_geometry(std::span<const SatelliteObservation> sats) {
   Eigen::Matrix4d normal = Eigen::Matrix4d::Zero();
   int n = 0;
   for (const auto& s : sats) {
-    if (!std::isfinite(s.cn0_dbhz)) continue;
+    if (!std::isfinite(s.cn0_dbhz) || !has_geometry(s)) continue;
     const double e = s.elevation_deg * std::numbers::pi / 180.0;
     const double a = s.azimuth_deg * std::numbers::pi / 180.0;
     const Eigen::Vector4d row(std::cos(e) * std::sin(a), std::cos(e) * std::cos(a), std::sin(e), 1.0);
@@ -132,7 +141,7 @@ inline double azimuth_vacancy(std::span<const SatelliteObservation> sats, double
                               std::span<double> scratch) {
   std::size_t n = 0;
   for (const auto& s : sats) {
-    if (!std::isfinite(s.cn0_dbhz) || s.elevation_deg < min_el || s.elevation_deg > max_el) continue;
+    if (!std::isfinite(s.cn0_dbhz) || !has_geometry(s) || s.elevation_deg < min_el || s.elevation_deg > max_el) continue;
     double a = std::fmod(s.azimuth_deg, 360.0);
     if (a < 0.0) a += 360.0;
     scratch[n++] = a;
@@ -151,10 +160,10 @@ class GnssSceneExtractor {
 
  public:
   explicit GnssSceneExtractor(GnssSceneConfig config = {}) : config_(config) {
-    if (config_.cn0_epochs < 1 || config_.cn0_epochs > WindowCapacity)
-      throw std::invalid_argument("GnssSceneExtractor: cn0_epochs must be in [1, WindowCapacity]");
-    if (!(config_.window_s > 0.0))
-      throw std::invalid_argument("GnssSceneExtractor: window_s must be > 0");
+    if (!(config_.window_s > 0.0 && std::isfinite(config_.window_s)))
+      throw std::invalid_argument("GnssSceneExtractor: window_s must be finite and > 0");
+    if (!(config_.cn0_window_s > 0.0 && std::isfinite(config_.cn0_window_s)))
+      throw std::invalid_argument("GnssSceneExtractor: cn0_window_s must be finite and > 0");
   }
 
   void reset() {
@@ -173,13 +182,17 @@ class GnssSceneExtractor {
     rec.time = epoch.time_s;
     rec.num_sats = 0;
     double cn0_sum = 0.0, el_sum = 0.0;
+    int with_elevation = 0;
     for (const auto& s : epoch.satellites) {
       if (!std::isfinite(s.cn0_dbhz)) continue;
       rec.ids[rec.num_sats] = s.id;
       rec.cn0[rec.num_sats] = s.cn0_dbhz;
       ++rec.num_sats;
       cn0_sum += s.cn0_dbhz;
-      el_sum += s.elevation_deg;
+      if (has_geometry(s)) {
+        el_sum += s.elevation_deg;
+        ++with_elevation;
+      }
     }
     const int count = rec.num_sats;
     double pdop = std::isfinite(epoch.pdop) ? epoch.pdop : pdop_from_geometry(epoch.satellites);
@@ -196,7 +209,7 @@ class GnssSceneExtractor {
     if (count > 0) {
       f[F::pdop] = std::isfinite(pdop) ? pdop : fill;
       f[F::mean_cn0] = cn0_sum / count;
-      f[F::mean_elevation] = el_sum / count;
+      if (with_elevation > 0) f[F::mean_elevation] = el_sum / with_elevation;
       f[F::azimuth_vacancy] = azimuth_vacancy_of(epoch.satellites);
       f[F::count_std] = window_std([](const Record& r) { return double(r.num_sats); }, epoch.time_s);
       const double ps = window_std([](const Record& r) { return r.pdop; }, epoch.time_s);
@@ -228,9 +241,8 @@ class GnssSceneExtractor {
       return GnssFeatureStatus::invalid_pdop;
     for (std::size_t i = 0; i < epoch.satellites.size(); ++i) {
       const auto& s = epoch.satellites[i];
-      if (!std::isfinite(s.elevation_deg) || std::abs(s.elevation_deg) > 90.0)
-        return GnssFeatureStatus::invalid_elevation;
-      if (!std::isfinite(s.azimuth_deg)) return GnssFeatureStatus::invalid_azimuth;
+      if (!std::isnan(s.elevation_deg) && !(std::abs(s.elevation_deg) <= 90.0)) return GnssFeatureStatus::invalid_elevation;
+      if (std::isinf(s.azimuth_deg)) return GnssFeatureStatus::invalid_azimuth;
       if (!std::isnan(s.cn0_dbhz) && !(s.cn0_dbhz >= 0.0 && s.cn0_dbhz <= 100.0))
         return GnssFeatureStatus::invalid_cn0;
       // Quadratic, but epochs hold a few dozen satellites and this keeps the step allocation-free.
@@ -273,7 +285,8 @@ class GnssSceneExtractor {
   double cn0_std_mean(const Record& current) const {
     double total = 0.0;
     int sats = 0;
-    const int depth = std::min(size_, config_.cn0_epochs);
+    int depth = 0;
+    while (depth < size_ && at_age(depth).time > current.time - config_.cn0_window_s) ++depth;
     std::array<double, WindowCapacity> values{};
     for (int i = 0; i < current.num_sats; ++i) {
       int n = 0;

@@ -1,0 +1,244 @@
+// Shared by `ctxfuse classify train|test` (classify_train.cpp, classify_test.cpp): the labelled
+// CSV reader with column selection, the metrics report, and the feature-dimension dispatch.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <map>
+#include <ostream>
+#include <span>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "cli/json.hpp"
+#include "cli/registry.hpp"
+#include "ctxfuse/classify/svm_folds.hpp"
+#include "ctxfuse/eval/classification.hpp"
+
+namespace ctxfuse::cli::classify_cli {
+
+inline constexpr int kMaxCliDim = 8;
+inline constexpr int kMaxCliClasses = 8;
+
+/// A problem with the user's input: exit status 1.
+struct InputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// Which CSV columns are the label, the features and the groups.
+struct ColumnSelection {
+  std::string label = "label";
+  std::vector<std::string> features;                // empty: every column not otherwise used
+  std::vector<std::string> ignore{"time_s"};        // never features (missing names are fine)
+  std::string groups;                               // empty: none
+};
+
+/// Declares --label, --features, --ignore (and --groups when `with_groups`) on `app`.
+inline void add_column_options(CLI::App& app, ColumnSelection& c, bool with_groups) {
+  app.add_option("--label", c.label, "name of the integer label column");
+  app.add_option("--features", c.features, "feature columns, in this order (comma-separated; default: all others)")
+      ->delimiter(',');
+  app.add_option("--ignore", c.ignore, "columns that are never features (comma-separated)")->delimiter(',');
+  if (with_groups)
+    app.add_option("--groups", c.groups, "column of group ids (recording, height, ...): folds keep groups whole; not a feature");
+}
+
+struct LabelledCsv {
+  std::vector<std::string> feature_names;
+  std::vector<std::vector<double>> rows;  // selected features, in selection order
+  std::vector<int> labels;
+  std::vector<int> groups;  // group index per row (first appearance order) when a group column is selected
+  std::size_t group_count = 0;
+};
+
+inline std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t' || s.front() == '\r')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  return s;
+}
+
+inline std::vector<std::string_view> split_commas(std::string_view line) {
+  std::vector<std::string_view> out;
+  std::size_t start = 0;
+  while (true) {
+    const auto comma = line.find(',', start);
+    out.push_back(trim(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start)));
+    if (comma == std::string_view::npos) return out;
+    start = comma + 1;
+  }
+}
+
+/// Reads a CSV with a header line. Only the selected columns are parsed (others may hold text).
+inline LabelledCsv read_labelled_csv(const std::string& path, const ColumnSelection& sel) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open for reading");
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (!trim(line).empty()) break;
+  }
+  if (trim(line).empty()) throw InputError(path + ": file is empty (expected a header line)");
+  std::vector<std::string> names;
+  for (auto name : split_commas(line)) names.emplace_back(name);
+  const auto head = path + ":" + std::to_string(line_no) + ": ";
+  std::map<std::string, int> column;
+  for (std::size_t c = 0; c < names.size(); ++c) {
+    if (names[c].empty()) throw InputError(head + "column " + std::to_string(c + 1) + ": empty column name");
+    if (!column.emplace(names[c], static_cast<int>(c)).second) throw InputError(head + "column '" + names[c] + "' appears twice");
+  }
+  const auto find = [&](const std::string& name, const char* role) {
+    const auto it = column.find(name);
+    if (it == column.end()) throw InputError(head + "header has no '" + name + "' column (" + role + ")");
+    return it->second;
+  };
+  const int label_col = find(sel.label, "--label");
+  const int group_col = sel.groups.empty() ? -1 : find(sel.groups, "--groups");
+  if (group_col == label_col) throw InputError("--groups and --label name the same column '" + sel.label + "'");
+  std::vector<int> feature_cols;
+  if (!sel.features.empty()) {
+    for (const auto& f : sel.features) {
+      const int c = find(f, "--features");
+      if (c == label_col || c == group_col) throw InputError("--features: '" + f + "' is the label or group column");
+      if (std::find(feature_cols.begin(), feature_cols.end(), c) != feature_cols.end())
+        throw InputError("--features: '" + f + "' listed twice");
+      feature_cols.push_back(c);
+    }
+  } else {
+    for (std::size_t c = 0; c < names.size(); ++c) {
+      const int ci = static_cast<int>(c);
+      if (ci == label_col || ci == group_col || std::find(sel.ignore.begin(), sel.ignore.end(), names[c]) != sel.ignore.end())
+        continue;
+      feature_cols.push_back(ci);
+    }
+  }
+  LabelledCsv csv;
+  for (int c : feature_cols) csv.feature_names.push_back(names[static_cast<std::size_t>(c)]);
+  if (csv.feature_names.empty()) throw InputError(head + "no feature columns selected");
+  if (csv.feature_names.size() > static_cast<std::size_t>(kMaxCliDim))
+    throw InputError(head + std::to_string(csv.feature_names.size()) + " feature columns; the CLI supports 1 to " +
+                     std::to_string(kMaxCliDim) + " (choose with --features or --ignore)");
+  std::map<double, int> group_index;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (trim(line).empty()) continue;
+    const auto fields = split_commas(line);
+    if (fields.size() != names.size())
+      throw InputError(path + ":" + std::to_string(line_no) + ": expected " + std::to_string(names.size()) + " fields, got " +
+                       std::to_string(fields.size()));
+    const auto number = [&](int c) {
+      const auto f = fields[static_cast<std::size_t>(c)];
+      const auto where = path + ":" + std::to_string(line_no) + ": column '" + names[static_cast<std::size_t>(c)] + "' (" +
+                         std::to_string(c + 1) + ")";
+      double v = 0.0;
+      const auto [ptr, ec] = std::from_chars(f.data(), f.data() + f.size(), v);
+      if (f.empty() || ec != std::errc() || ptr != f.data() + f.size())
+        throw InputError(where + ": expected a number, got '" + std::string(f) + "'");
+      if (!std::isfinite(v)) throw InputError(where + ": value is NaN or Inf");
+      if (c == label_col && (v != std::floor(v) || std::fabs(v) > 1e9))
+        throw InputError(where + ": label must be an integer, got '" + std::string(f) + "'");
+      return v;
+    };
+    csv.labels.push_back(static_cast<int>(number(label_col)));
+    if (group_col >= 0) {
+      const auto [it, added] = group_index.emplace(number(group_col), static_cast<int>(group_index.size()));
+      csv.groups.push_back(it->second);
+    }
+    std::vector<double> row;
+    row.reserve(feature_cols.size());
+    for (int c : feature_cols) row.push_back(number(c));
+    csv.rows.push_back(std::move(row));
+  }
+  if (csv.rows.empty()) throw InputError(path + ": no data rows after the header");
+  csv.group_count = group_index.size();
+  return csv;
+}
+
+/// Accuracy, balanced accuracy, macro-F1, per-class precision / recall / F1 and the labelled
+/// confusion matrix, classes in ascending label order; the same figures into `json`.
+inline void print_metrics(std::span<const int> classes, const eval::ConfusionMatrix& cm, std::ostream& out, Json& json) {
+  const int k = static_cast<int>(classes.size());
+  const auto pct = [](double v) {
+    std::ostringstream s;
+    if (std::isnan(v)) s << "-";
+    else s << std::fixed << std::setprecision(2) << 100.0 * v;
+    return s.str();
+  };
+  out << "samples            " << cm.total() << "\naccuracy           " << pct(cm.accuracy()) << " %\nbalanced accuracy  "
+      << pct(cm.balanced_accuracy()) << " %\nmacro-F1           " << pct(cm.macro_f1()) << " %\n\n";
+  out << "class   precision %   recall %       F1 %   support\n";
+  json["samples"] = static_cast<long long>(cm.total());
+  json["accuracy"] = cm.accuracy();
+  json["balanced_accuracy"] = cm.balanced_accuracy();
+  json["macro_f1"] = cm.macro_f1();
+  Json::Array per_class;
+  for (int c = 0; c < k; ++c) {
+    out << std::setw(5) << classes[static_cast<std::size_t>(c)] << "   " << std::setw(11) << pct(cm.precision(c)) << "   "
+        << std::setw(8) << pct(cm.recall(c)) << "   " << std::setw(8) << pct(cm.f1(c)) << "   " << std::setw(7) << cm.support(c) << '\n';
+    Json entry;
+    entry["label"] = classes[static_cast<std::size_t>(c)];
+    entry["precision"] = cm.precision(c);  // null when nothing was predicted as this class
+    entry["recall"] = cm.recall(c);
+    entry["f1"] = cm.f1(c);
+    entry["support"] = static_cast<long long>(cm.support(c));
+    per_class.push_back(std::move(entry));
+  }
+  json["per_class"] = Json(std::move(per_class));
+  out << "\nconfusion matrix (rows: true label, columns: predicted label)\ntrue\\pred";
+  for (int c : classes) out << std::setw(8) << c;
+  out << '\n';
+  // Arrays are filled in place: pushing Json temporaries trips a false -Wmaybe-uninitialized in
+  // g++ 12's std::variant move.
+  Json::Array confusion;
+  Json::Array labels;
+  for (int r = 0; r < k; ++r) {
+    labels.emplace_back(classes[static_cast<std::size_t>(r)]);
+    out << std::setw(9) << classes[static_cast<std::size_t>(r)];
+    Json::Array row;
+    for (int c = 0; c < k; ++c) {
+      out << std::setw(8) << cm.count(r, c);
+      row.emplace_back(static_cast<double>(cm.count(r, c)));
+    }
+    confusion.emplace_back(std::move(row));
+    out << '\n';
+  }
+  json["labels"] = Json(std::move(labels));
+  json["confusion"] = Json(std::move(confusion));
+}
+
+template <int Dim>
+Eigen::Matrix<double, Dim, 1> row_vector(const std::vector<double>& row) {
+  Eigen::Matrix<double, Dim, 1> x;
+  for (int f = 0; f < Dim; ++f) x[f] = row[static_cast<std::size_t>(f)];
+  return x;
+}
+
+/// Fn<Dim>::run(a...) for the run-time feature count.
+template <template <int> class Fn, class... A>
+int dispatch_dim(int dim, A&&... a) {
+  switch (dim) {
+    case 1: return Fn<1>::run(a...);
+    case 2: return Fn<2>::run(a...);
+    case 3: return Fn<3>::run(a...);
+    case 4: return Fn<4>::run(a...);
+    case 5: return Fn<5>::run(a...);
+    case 6: return Fn<6>::run(a...);
+    case 7: return Fn<7>::run(a...);
+    case 8: return Fn<8>::run(a...);
+    default: throw InputError("feature dimension " + std::to_string(dim) + " outside 1..8");
+  }
+}
+
+int classify_train(Args args, std::ostream& out, std::ostream& err);
+int classify_test(Args args, std::ostream& out, std::ostream& err);
+
+}  // namespace ctxfuse::cli::classify_cli
