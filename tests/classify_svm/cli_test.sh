@@ -107,6 +107,8 @@ help_has "--window FLOAT" "=4" "--cn0-window" "--fill FLOAT=-1" "--labels" "--la
 help_has "--open-max-error FLOAT" "=0.6" "--window" "--train-fraction" -- "$cli" features nmea --help
 help_has "--window INT" "=1" "--height-column" -- "$cli" features uwb-static --help
 help_has "--static" "--data" "--out" -- "$cli" features dw1000 --help
+help_has "--validation-fraction FLOAT" "=0.25" "--decoder" "=viterbi" "--covariance" "=diagonal" -- "$cli" context joint --help
+expect_error 2 "--train is required" "$cli" context joint --test test.csv
 
 # 5. Column selection: named label, chosen features, text columns left alone; classes sorted.
 awk -F, 'BEGIN { OFS = "," } NR == 1 { print "time_s,note,count,cls,snr"; next } { print NR, "x" NR, $3, $1, $2 }' train.csv > cols.csv

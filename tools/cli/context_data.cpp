@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <map>
 #include <string>
@@ -20,6 +21,7 @@
 #include <ctxfuse/classify/svm_train.hpp>
 #include <ctxfuse/eval/classification.hpp>
 
+#include "cli/options.hpp"
 #include "cli/registry.hpp"
 
 namespace {
@@ -27,22 +29,15 @@ namespace {
 using ctxfuse::cli::Args;
 namespace cls = ctxfuse::classify;
 
-struct UsageError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
 constexpr std::string_view kHelp =
-    "usage: ctxfuse context joint --train CSV --test CSV [--validation-fraction F]\n"
-    "         [--kernel linear|rbf] [--C c] [--gamma g] [--covariance full|diagonal]\n"
-    "         [--decoder viterbi|filter]\n"
-    "  CSVs: header, integer `label` column with regions 0..N-1 (N = 2 or 3), 2 or 8 numeric\n"
-    "  feature columns, rows in time order (one sequence). The first 1-F of --train (default\n"
-    "  F = 0.25) fits an SVM and a Gaussian HMM; the last F is the validation set that gives the\n"
-    "  per-region accuracies P_S,k, P_H,k and so the vote weights w = P / (P_S + P_H). --test is\n"
-    "  then classified by the SVM, the HMM (Viterbi over the whole test sequence, or the online\n"
-    "  forward filter's most probable region) and the weighted vote; prints accuracy,\n"
-    "  precision/recall and confusion matrix of each, and the transition matrix of the joint\n"
-    "  labels (rows without transitions: identity).\n";
+    "The region paper's joint classifier (SVM + HMM, weighted vote, eq. 18-28). CSVs: header, integer\n"
+    "`label` column with regions 0..N-1 (N = 2 or 3), 2 or 8 numeric feature columns, rows in time order\n"
+    "(one sequence). The first 1-F of --train fits an SVM and a Gaussian HMM; the last F is the\n"
+    "validation set that gives the per-region accuracies P_S,k, P_H,k and so the vote weights\n"
+    "w = P / (P_S + P_H). --test is then classified by the SVM, the HMM (Viterbi over the whole test\n"
+    "sequence, or the online forward filter's most probable region) and the weighted vote; prints\n"
+    "accuracy, precision/recall and confusion matrix of each, and the transition matrix of the joint\n"
+    "labels (rows without transitions: identity).";
 
 struct Table {
   std::vector<int> labels;
@@ -116,10 +111,11 @@ void report(std::ostream& out, std::string_view name, std::span<const int> truth
   out << name << ": accuracy " << pct(m.accuracy()) << " %\n  region  precision %  recall %  support\n";
   for (int k = 0; k < n; ++k)
     out << "  " << k << "       " << pct(m.precision(k)) << "     " << pct(m.recall(k)) << "   " << m.support(k) << '\n';
-  out << "  confusion (rows true, columns predicted):";
+  out << "  confusion (rows: true region, columns: predicted region)\n  true\\pred";
+  for (int p = 0; p < n; ++p) out << ' ' << std::setw(6) << p;
   for (int t = 0; t < n; ++t) {
-    out << "\n   ";
-    for (int p = 0; p < n; ++p) out << ' ' << m.count(t, p);
+    out << "\n  " << std::setw(9) << t;
+    for (int p = 0; p < n; ++p) out << ' ' << std::setw(6) << m.count(t, p);
   }
   out << '\n';
 }
@@ -203,64 +199,37 @@ int run_joint(const Table& train, const Table& test, const Settings& s, std::ost
 }
 
 int run_context(Args args, std::ostream& out, std::ostream& err) {
-  if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] != "joint") {
-    if (!args.empty() && args[0] != "--help" && args[0] != "-h")
-      err << "ctxfuse context: unknown sub-command '" << args[0] << "'\n";
-    (args.empty() || (args[0] != "--help" && args[0] != "-h") ? err : out) << kHelp;
-    return args.empty() || (args[0] != "--help" && args[0] != "-h") ? 2 : 0;
+  if (args.empty() || args[0] == "--help" || args[0] == "-h") {
+    (args.empty() ? err : out) << "usage: ctxfuse context joint [options]   (`ctxfuse context joint --help` lists them)\n";
+    return args.empty() ? 2 : 0;
   }
-  std::map<std::string, std::string> opt;
-  const std::vector<std::string_view> known{"--train", "--test", "--validation-fraction", "--kernel", "--C",
-                                            "--gamma", "--covariance", "--decoder"};
-  for (std::size_t i = 1; i < args.size(); i += 2) {
-    if (args[i] == "--help" || args[i] == "-h") return out << kHelp, 0;
-    if (std::find(known.begin(), known.end(), args[i]) == known.end() || i + 1 >= args.size()) {
-      err << "ctxfuse context joint: unknown option or missing value '" << args[i] << "'\n" << kHelp;
-      return 2;
-    }
-    opt[std::string(args[i])] = std::string(args[i + 1]);
+  if (args[0] != "joint") {
+    err << "ctxfuse context: unknown sub-command '" << args[0] << "' (joint)\n";
+    return 2;
   }
-  auto number = [&](const std::string& k, double fallback) {
-    if (!opt.count(k)) return fallback;
-    double v = 0;
-    const auto& s = opt[k];
-    const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-    if (ec != std::errc{} || p != s.data() + s.size() || !std::isfinite(v))
-      throw UsageError("option " + k + ": '" + s + "' is not a number");
-    return v;
-  };
+  auto app = ctxfuse::cli::make_app("context joint", std::string(kHelp));
+  std::string train_path, test_path, kernel = "linear", covariance = "diagonal", decoder = "viterbi";
+  Settings s;
+  s.svm.C = 1.0;
+  s.svm.gamma = 0.0;
+  app.add_option("--train", train_path, "labelled CSV: fit (first 1-F) and validation (last F) rows")->required();
+  app.add_option("--test", test_path, "labelled CSV to classify")->required();
+  app.add_option("--validation-fraction", s.validation_fraction, "F: the last F of --train validate")->check(CLI::Range(0.0, 1.0));
+  app.add_option("--kernel", kernel, "SVM kernel: linear or rbf")->check(CLI::IsMember({"linear", "rbf"}));
+  app.add_option("--C", s.svm.C, "SVM C")->check(CLI::PositiveNumber);
+  app.add_option("--gamma", s.svm.gamma, "RBF gamma; 0 = 1 / features")->check(CLI::NonNegativeNumber);
+  app.add_option("--covariance", covariance, "HMM emission covariance: full or diagonal")->check(CLI::IsMember({"full", "diagonal"}));
+  app.add_option("--decoder", decoder, "HMM decoding: viterbi or filter")->check(CLI::IsMember({"viterbi", "filter"}));
+  if (const auto status = ctxfuse::cli::parse_options(app, args.subspan(1), out, err)) return *status;
+  if (!(s.validation_fraction > 0.0 && s.validation_fraction < 1.0)) {
+    err << "ctxfuse context joint: --validation-fraction must be in (0, 1)\n";
+    return 2;
+  }
+  s.svm.kernel = kernel == "rbf" ? cls::SvmKernel::rbf : cls::SvmKernel::linear;
+  s.hmm.covariance = covariance == "full" ? cls::CovarianceKind::full : cls::CovarianceKind::diagonal;
+  s.viterbi = decoder == "viterbi";
   try {
-    if (!opt.count("--train") || !opt.count("--test")) {
-      err << "ctxfuse context joint: --train and --test are required\n" << kHelp;
-      return 2;
-    }
-    Settings s;
-    s.validation_fraction = number("--validation-fraction", 0.25);
-    if (!(s.validation_fraction > 0.0 && s.validation_fraction < 1.0))
-      throw UsageError("--validation-fraction must be in (0, 1)");
-    s.svm.kernel = cls::SvmKernel::linear;
-    if (opt.count("--kernel")) {
-      if (opt["--kernel"] == "rbf")
-        s.svm.kernel = cls::SvmKernel::rbf;
-      else if (opt["--kernel"] != "linear")
-        throw UsageError("--kernel must be linear or rbf");
-    }
-    s.svm.C = number("--C", 1.0);
-    s.svm.gamma = number("--gamma", 0.0);
-    s.hmm.covariance = cls::CovarianceKind::diagonal;
-    if (opt.count("--covariance")) {
-      if (opt["--covariance"] == "full")
-        s.hmm.covariance = cls::CovarianceKind::full;
-      else if (opt["--covariance"] != "diagonal")
-        throw UsageError("--covariance must be full or diagonal");
-    }
-    if (opt.count("--decoder")) {
-      if (opt["--decoder"] == "filter")
-        s.viterbi = false;
-      else if (opt["--decoder"] != "viterbi")
-        throw UsageError("--decoder must be viterbi or filter");
-    }
-    const Table train = read_table(opt["--train"]), test = read_table(opt["--test"]);
+    const Table train = read_table(train_path), test = read_table(test_path);
     if (train.features != test.features) throw std::runtime_error("--train and --test have different feature counts");
     const int regions = 1 + std::max(*std::max_element(train.labels.begin(), train.labels.end()),
                                      *std::max_element(test.labels.begin(), test.labels.end()));
@@ -270,9 +239,6 @@ int run_context(Args args, std::ostream& out, std::ostream& err) {
     if (train.features == 2 && n == 2) return run_joint<2, 2>(train, test, s, out);
     if (train.features == 2 && n == 3) return run_joint<3, 2>(train, test, s, out);
     err << "ctxfuse context joint: " << train.features << " features are not supported (2 or 8)\n";
-    return 2;
-  } catch (const UsageError& e) {
-    err << "ctxfuse context joint: " << e.what() << '\n';
     return 2;
   } catch (const std::exception& e) {
     err << "ctxfuse context joint: error: " << e.what() << '\n';
