@@ -108,7 +108,8 @@ std::string pct(double v) {
 
 void report(std::ostream& out, std::string_view name, std::span<const int> truth, std::span<const int> pred, int n) {
   const auto m = ctxfuse::eval::ConfusionMatrix::from_labels(truth, pred, n);
-  out << name << ": accuracy " << pct(m.accuracy()) << " %\n  region  precision %  recall %  support\n";
+  out << name << ": accuracy " << pct(m.accuracy()) << " %, balanced accuracy " << pct(m.balanced_accuracy())
+      << " %, macro-F1 " << pct(m.macro_f1()) << " %\n  region  precision %  recall %  support\n";
   for (int k = 0; k < n; ++k)
     out << "  " << k << "       " << pct(m.precision(k)) << "     " << pct(m.recall(k)) << "   " << m.support(k) << '\n';
   out << "  confusion (rows: true region, columns: predicted region)\n  true\\pred";
