@@ -201,8 +201,15 @@ NumberError parse_whole(std::string_view field, Int& out, Int lo, Int hi) {
   double v = 0.0;
   if (const auto e = parse_real(field, v); e != NumberError::none) return e;
   if (v != std::floor(v)) return NumberError::not_whole;
-  if (v < static_cast<double>(lo) || v > static_cast<double>(hi)) return NumberError::out_of_range;
-  out = static_cast<Int>(v);
+  // Inside Int's range before converting: comparing with double(hi) is not enough, since
+  // double(INT64_MAX) rounds up to 2^63, which passes `v > hi` and then does not fit (the
+  // conversion is undefined behaviour; the fuzz target of io/text.hpp found it). The
+  // exclusive bound 2^digits and the bound min() are powers of two (or 0), exact in double.
+  constexpr double type_hi = 2.0 * static_cast<double>(std::numeric_limits<Int>::max() / 2 + 1);
+  if (!(v >= static_cast<double>(std::numeric_limits<Int>::min()) && v < type_hi)) return NumberError::out_of_range;
+  const Int w = static_cast<Int>(v);
+  if (w < lo || w > hi) return NumberError::out_of_range;
+  out = w;
   return NumberError::none;
 }
 
