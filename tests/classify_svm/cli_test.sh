@@ -87,7 +87,7 @@ head -c 700 ours.model > cut.model
 "$cli" classify test --model cut.model --data test.csv > err.out 2>&1
 [ $? -eq 1 ] || fail "truncated model: expected status 1: $(cat err.out)"
 expect_error 1 "missing.csv: cannot open" "$cli" classify test --model ours.model --data missing.csv
-expect_error 2 "not expected: --bogus" "$cli" classify train --data train.csv --model x.model --bogus
+expect_error 2 "--bogus" "$cli" classify train --data train.csv --model x.model --bogus
 expect_error 2 "--kernel: poly not in {linear,rbf}" "$cli" classify train --data train.csv --model x.model --kernel poly
 expect_error 2 "--model is required" "$cli" classify test --data test.csv
 expect_error 2 "--class-weight" "$cli" classify train --data train.csv --model x.model --class-weight 1:x
