@@ -2,8 +2,8 @@
 """The region_imm tables of docs/results.md over several simulated drives:
     scripts/region_imm_seeds.py [--cli PATH] [--scenario default|paper] [--seeds 1-5] [--out DIR]
 Runs `ctxfuse demo --seed N --scenario S --json DIR/S-N.json` for every seed and prints, as
-markdown: overall / transition-region mean error of FKF, plain IMM, region IMM, region IMM on
-the true labels and region IMM + posterior pull; how many seeds the paper's ordering
+markdown: overall / transition-region mean error of FKF, FKF with static fusion weights, plain
+IMM, region IMM, region IMM on the true labels and region IMM + posterior pull; how many seeds the paper's ordering
 (region IMM < IMM < FKF) holds on, overall and in the transition region; recognition accuracy
 PSO-SVM / HMM / joint; and what routing could exclude (region_imm.routing.* of the JSON).
 Defaults: build/release/tools/ctxfuse, scenario default, seeds 1-5, out build/region-imm-seeds."""
@@ -13,7 +13,7 @@ import os
 import subprocess
 import sys
 
-METHODS = ("fkf", "imm", "region_imm", "region_imm_true_labels", "region_imm_posterior")
+METHODS = ("fkf", "fkf_static", "imm", "region_imm", "region_imm_true_labels", "region_imm_posterior")
 
 
 def seed_list(text):
@@ -60,8 +60,8 @@ def main():
             docs[seed] = json.load(f)["region_imm"]
 
     print(f"Scenario `{a.scenario}`. Overall / transition-region mean error (m):\n")
-    print("| seed | FKF | IMM | region IMM | region IMM, true labels | region IMM + pull |")
-    print("|---|---|---|---|---|---|")
+    print("| seed | FKF | FKF static | IMM | region IMM | region IMM, true labels | region IMM + pull |")
+    print("|---|---|---|---|---|---|---|")
     holds = {"overall": 0, "transition": 0}
     for seed, d in docs.items():
         e = d["mean_error_m"]

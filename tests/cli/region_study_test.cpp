@@ -17,8 +17,10 @@
 #include <string>
 #include <vector>
 
+#include "ctxfuse/eval/region_errors.hpp"
 #include "ctxfuse/pipelines/region_imm.hpp"
 #include "ctxfuse/sim/drive.hpp"
+#include "ctxfuse/sim/streams.hpp"
 #include "ctxfuse/sim/scenarios.hpp"
 #include "support/run_cli.hpp"
 
@@ -230,16 +232,18 @@ TEST_F(RegionStudy, PrintedTableIsTheJson) {
 }
 
 TEST_F(RegionStudy, FkfIsOfferedEveryUpdateAfterTheStart) {
-  // The FKF takes every fix after the one it starts from and every range after that time; its
-  // gate cannot reject more than it was offered, nor accept NLOS ranges it was not offered.
+  // The FKF takes every fix after the one it starts from (the dynamic alignment's, which the
+  // pipeline reports) and every range after that time; its gate cannot reject more than it was
+  // offered, nor accept NLOS ranges it was not offered.
   ASSERT_NE(json_, nullptr);
   const sim::Drive& d = *drive_;
   const Zoner z(d);
-  const auto first = std::find_if(d.gnss.begin(), d.gnss.end(), [](const sim::GnssEpoch& e) { return e.has_fix; });
-  ASSERT_NE(first, d.gnss.end());
-  const double t0 = first->t;
+  const auto start = ri::run(sim::sensor_log(d), ri::Estimator::fkf, ri::Settings{}).alignment;
+  ASSERT_TRUE(start.has_value());
+  const double t0 = start->t;
   std::array<int, 6> fixes{}, ranges{}, nlos{};
-  for (auto it = std::next(first); it != d.gnss.end(); ++it) fixes[z.zone(it->t, it->region)] += it->has_fix ? 1 : 0;
+  for (const auto& e : d.gnss)
+    if (e.t > t0) fixes[z.zone(e.t, e.region)] += e.has_fix ? 1 : 0;
   for (const auto& r : d.uwb) {
     if (r.t <= t0 + 1e-9) continue;
     const auto k = z.zone(r.t, z.truth_near(r.t).region);
@@ -266,8 +270,9 @@ TEST_F(RegionStudy, FkfIsOfferedEveryUpdateAfterTheStart) {
 TEST_F(RegionStudy, ErrorsAreThoseOfThePipelineAndTheSummaryAgrees) {
   ASSERT_NE(json_, nullptr);
   const ri::Settings s;
-  const auto fkf = ri::errors(ri::run(*drive_, ri::Estimator::fkf, s));
-  const auto imm = ri::errors(ri::run(*drive_, ri::Estimator::imm, s));
+  const auto log = sim::sensor_log(*drive_);
+  const auto fkf = ctxfuse::eval::region_errors(ri::run(log, ri::Estimator::fkf, s).track, drive_->truth);
+  const auto imm = ctxfuse::eval::region_errors(ri::run(log, ri::Estimator::imm, s).track, drive_->truth);
   const Value& e = seed_doc()["mean_error_m"];
   const std::array<std::string, 4> col{"outdoor", "transition", "indoor", "overall"};
   for (std::size_t k = 0; k < 4; ++k) {
@@ -310,19 +315,19 @@ TEST(RegionStudyUsage, BadFlagsExitTwoNamingTheProblem) {
     const char* args;
     const char* message;
   };
-  for (const Case& c : {Case{"--scenario nope --seeds 1", "unknown scenario 'nope'"},
+  for (const Case& c : {Case{"--scenario nope --seeds 1", "--scenario: nope not in {default,paper}"},
                         Case{"--seeds 5-2", "range '5-2' runs backwards"},
                         Case{"--seeds 1,x", "'x' is not a seed"},
                         Case{"--seeds 1,,2", "'' is not a seed"},
                         Case{"--seeds -3", "'' is not a seed"},
                         Case{"--seeds 1-3,2", "seed 2 listed twice"},
                         Case{"--seeds 99999999999", "'99999999999' is not a seed"},
-                        Case{"--seeds", "'--seeds' needs a value"},
+                        Case{"--seeds", "--seeds: 1 required TEXT missing"},
                         Case{"--gate 0.9", "unknown option '--gate'"},
-                        Case{"--indoor-fix-error x", "--indoor-fix-error expects a number, got 'x'"},
+                        Case{"--indoor-fix-error x", "Could not convert: --indoor-fix-error = x"},
                         Case{"--indoor-fix-error -1", "gnss.indoor_fix_error_m must be finite and >= 0"},
                         Case{"--indoor-fix-reported-ratio 0", "gnss.indoor_fix_reported_ratio must be within (0, 100]"},
-                        Case{"extra", "unexpected argument 'extra'"}}) {
+                        Case{"extra", "The following argument was not expected: extra"}}) {
     const auto r = run(std::string("region-study ") + c.args);
     EXPECT_EQ(r.code, 2) << c.args << ": " << r.err;
     EXPECT_NE(r.err.find(c.message), std::string::npos) << c.args << ": " << r.err;

@@ -425,3 +425,40 @@ TEST(Replay, WithoutImuMeasurementsComeInOrderAndNothingIsPropagated) {
   EXPECT_EQ(with_imu.propagations, 312);
   expect_same_calls(with_imu.events, want.in_order());
 }
+
+namespace {
+
+// Increment samples (angle increments over the interval that ends at their stamp): over each
+// interval the handler gets the mean rate of the sample that ends it, so x integrates exactly
+// to the sum of the increments, and a measurement inside an interval sees that interval's
+// rate times the time elapsed in it.
+TEST(Replay, IncrementSamplesActOverTheIntervalThatEndsAtTheirStamp) {
+  std::vector<io::ImuSample> imu;
+  const std::array<double, 5> stamps{0.0, 0.01, 0.02, 0.035, 0.05};  // irregular
+  const std::array<double, 5> increments{9.0, 0.02, -0.01, 0.03, 0.045};  // the first is never used
+  for (std::size_t k = 0; k < stamps.size(); ++k) {
+    io::ImuSample s;
+    s.t = stamps[k];
+    s.gyro.x() = increments[k];
+    s.increments = true;
+    imu.push_back(s);
+  }
+  std::vector<io::GnssFix> fixes(1);
+  fixes[0].t = 0.03;  // 2/3 of the way through (0.02, 0.035]
+  Integrator h;
+  const auto report = io::replay(h, sp(imu), sp(fixes));
+  EXPECT_EQ(report.imu.delivered, 5u);
+  EXPECT_NEAR(h.x, 0.02 - 0.01 + 0.03 + 0.045, 1e-15);
+  // The fix saw the first two intervals whole and 2/3 of the third.
+  const auto fix = std::find_if(h.events.begin(), h.events.end(), [](const Event& e) { return e.kind == 'g'; });
+  ASSERT_NE(fix, h.events.end());
+  EXPECT_NEAR(fix->x, 0.02 - 0.01 + 0.03 * (0.01 / 0.015), 1e-15);
+  // Every propagation hands the handler rates, never increments.
+  for (const auto& e : h.events) {
+    if (e.kind == 'p') {
+      EXPECT_GT(e.value, 0.0);
+    }
+  }
+}
+
+}  // namespace

@@ -272,6 +272,20 @@ TEST(RegionPipeline, FiltersStartFromTheLogsOwnFixes) {
   EXPECT_GT(a.t, 5.0);
 }
 
+// Motion known from elsewhere (a static alignment, the end of a previous drive): the filters
+// start at the log's first fix with it, not by dynamic alignment.
+TEST(RegionPipeline, KnownMotionStartsAtTheFirstFix) {
+  const ri::Settings s;
+  ri::RunOptions o;
+  o.known_motion = ri::KnownMotion{Eigen::Vector2d(0.0, 0.0), 0.3};
+  const auto r = ri::run(drive().log, ri::Estimator::odr, s, o);
+  EXPECT_FALSE(r.alignment.has_value());
+  ASSERT_FALSE(r.track.t.empty());
+  EXPECT_EQ(r.track.t.front(), drive().log.gnss.front().t);
+  EXPECT_EQ(r.track.estimate.front(), Eigen::Vector2d(drive().log.gnss.front().position.head<2>()));
+  EXPECT_LT(r.track.t.front(), ri::run(drive().log, ri::Estimator::odr, s).track.t.front());
+}
+
 // Bad time stamps in the log are dropped and counted by the replay, and the estimate is the
 // one of the clean log, bit for bit.
 TEST(RegionPipeline, BadStampsAreDroppedCountedAndChangeNothing) {

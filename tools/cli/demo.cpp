@@ -10,7 +10,7 @@
 #include <optional>
 #include <string>
 
-#include "cli/cli_args.hpp"
+#include "cli/options.hpp"
 #include "cli/error_report.hpp"
 #include "cli/plot.hpp"
 #include "cli/progress.hpp"
@@ -109,30 +109,26 @@ void gnss_baseline(const sim::Drive& d, Json& j, std::ostream& out, Plotter* plo
 }
 
 int demo_command(Args args, std::ostream& out, std::ostream& err) {
-  if (wants_help(args)) {
-    out << "usage: ctxfuse demo [--seed N] " << kScenarioFlagsUsage << " [--json FILE] [--plot DIR]\n"
-        << "Simulates the drive and runs every built demo section against the papers' tables.\n"
-        << kScenarioFlagsHelp;
-    return 0;
-  }
-  FlagParser flags("demo", with_scenario_flags({"--seed", "--json", "--plot"}));
-  if (!flags.parse(args, err)) return 2;
-  if (!flags.positionals().empty()) {
-    err << "ctxfuse demo: unexpected argument '" << flags.positionals()[0] << "'\n";
-    return 2;
-  }
+  CLI::App app = make_app("demo", "Simulates the drive and runs every built demo section against the papers' tables.");
   DemoContext ctx;
-  if (!flags.get_u64("--seed", ctx.seed, err)) return 2;
+  ScenarioOptions scenario_options;
+  std::string json_path, plot_dir;
+  app.add_option("--seed", ctx.seed, "seed of the simulated drive (training and validation drives follow from it)")
+      ->check(kNonNegativeInteger);
+  add_scenario_options(app, scenario_options);
+  app.add_option("--json", json_path, "write every number of the tables as JSON (docs/formats.md)");
+  app.add_option("--plot", plot_dir, "write the sections' plots (PNG, gnuplot) into this directory");
+  if (const auto rc = parse_options(app, args, out, err)) return *rc;
   const auto t0 = std::chrono::steady_clock::now();
-  const std::string scenario = scenario_label(flags);
-  std::optional<sim::DriveConfig> cfg = scenario_from_flags(flags, "demo", err);
+  const std::string scenario = scenario_label(scenario_options);
+  std::optional<sim::DriveConfig> cfg = scenario_config(scenario_options, "demo", err);
   if (!cfg) return 2;
   cfg->seed = ctx.seed;
   const sim::Drive drive = sim::simulate_drive(*cfg);
   ctx.drive = &drive;
   std::unique_ptr<Plotter> plotter;
-  if (auto dir = flags.get("--plot")) {
-    plotter = std::make_unique<Plotter>(*dir, err);
+  if (!plot_dir.empty()) {
+    plotter = std::make_unique<Plotter>(plot_dir, err);
     if (plotter->available()) ctx.plotter = plotter.get();
   }
 
@@ -180,7 +176,7 @@ int demo_command(Args args, std::ostream& out, std::ostream& err) {
   }
   const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   doc["elapsed_s"] = elapsed;
-  if (auto path = flags.get("--json"); path && !write_json_file(doc, *path, "demo", err)) return 1;
+  if (!json_path.empty() && !write_json_file(doc, json_path, "demo", err)) return 1;
   return 0;
 }
 

@@ -7,35 +7,59 @@
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <optional>
 #include <ostream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "cli/registry.hpp"
 
 namespace ctxfuse::cli {
 
-/// A CLI::App with the project's conventions: every option's default is shown in --help.
-/// (CLI::App can be neither copied nor moved, so the conventions are set in a constructor and
-/// make_app returns a prvalue, which C++17 guarantees is not moved.)
-struct CtxfuseApp : CLI::App {
-  CtxfuseApp(const std::string& description, const std::string& name) : CLI::App(description, name) {
-    option_defaults()->always_capture_default();
-    get_formatter()->column_width(34);
-  }
-};
-
-/// A CLI::App for sub-command `name` with the project's conventions: every option's default
-/// is shown in --help, and `description` opens the help text.
-inline CtxfuseApp make_app(const std::string& name, const std::string& description) {
-  return CtxfuseApp(description, "ctxfuse " + name);
+/// A CLI::App for sub-command `name`; `description` opens the help text. (CLI::App can be
+/// neither copied nor moved: the result is a prvalue, which C++17 guarantees is not moved, so
+/// both `auto app = make_app(...)` and `CLI::App app = make_app(...)` work. The project's
+/// conventions, every option's default shown in --help, are applied by parse_options.)
+inline CLI::App make_app(const std::string& name, const std::string& description) {
+  return CLI::App(description, "ctxfuse " + name);
 }
+
+/// For unsigned options (seeds): digits only. CLI11 2.1 would take "-3" and wrap it round.
+inline const CLI::Validator kNonNegativeInteger(
+    [](std::string& s) {
+      return !s.empty() && s.find_first_not_of("0123456789") == std::string::npos ? std::string()
+                                                                                   : "'" + s + "' is not a non-negative integer";
+    },
+    "", "non-negative integer");
 
 /// Parses `args` into `app`. Returns nothing when the command should go on, otherwise the
 /// exit status to return: 0 after printing --help to `out`, 2 after printing a usage error
 /// (unknown option, missing or malformed value, failed check) to `err`.
 inline std::optional<int> parse_options(CLI::App& app, Args args, std::ostream& out, std::ostream& err) {
+  // Every option's default, i.e. its value before parsing, shown in --help; and every long
+  // option name, so that an unknown one is named as such (CLI11 would first complain about a
+  // missing required option, or list the stray words in reverse).
+  std::vector<std::string> known{"--help"};
+  auto prepare = [&](CLI::App& a) {
+    a.get_formatter()->column_width(34);
+    for (CLI::Option* option : a.get_options()) {
+      option->capture_default_str();
+      for (const auto& name : option->get_lnames()) known.push_back("--" + name);
+    }
+  };
+  prepare(app);
+  for (CLI::App* sub : app.get_subcommands({})) prepare(*sub);
+  for (std::string_view a : args) {
+    if (!a.starts_with("--")) continue;
+    const std::string name(a.substr(0, a.find('=')));
+    if (std::find(known.begin(), known.end(), name) == known.end()) {
+      err << app.get_name() << ": unknown option '" << name << "'\n";
+      err << "(`" << app.get_name() << " --help` lists the options)\n";
+      return 2;
+    }
+  }
   // CLI11 takes the arguments in reverse order.
   std::vector<std::string> reversed;
   reversed.reserve(args.size());

@@ -1,26 +1,35 @@
-// Pipelines for `ctxfuse run PIPELINE --data DIR`. A pipeline turns a set of logs (the files
-// of `ctxfuse sim`, read by ctxfuse/sim/log_io.hpp) into a trajectory; `run` scores it against
-// truth.csv and writes the JSON and CSV outputs. Pipelines register themselves from their own
-// tools/cli/*.cpp:
-//   static ctxfuse::cli::RegisterRunPipeline reg{{"name", "one-line summary",
-//       [](const ctxfuse::cli::RunInput& in, ctxfuse::cli::RunOutput& out, std::ostream& err) -> int {...}}};
+// Pipelines for `ctxfuse run PIPELINE --data DIR`. A pipeline turns the sensor streams of a set
+// of logs (the files of `ctxfuse sim`, read by ctxfuse/io/sim_logs.hpp, truth kept apart) into
+// a trajectory; `run` scores it against truth.csv and writes the JSON and CSV outputs. Each
+// pipeline declares its own options on a CLI11 sub-command and lists the files it reads (shown
+// by `ctxfuse run --help`). Pipelines register themselves from their own tools/cli/*.cpp:
+//   static ctxfuse::cli::RegisterRunPipeline reg{{"name", "one-line summary", "files it reads",
+//       add_options, run}};
 #pragma once
 
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <ostream>
 #include <string_view>
 #include <vector>
 
 #include "cli/json.hpp"
+#include "cli/options.hpp"
 #include "ctxfuse/eval/trajectory.hpp"
-#include "ctxfuse/sim/log_io.hpp"
+#include "ctxfuse/eval/truth.hpp"
+#include "ctxfuse/io/messages.hpp"
 
 namespace ctxfuse::cli {
 
+class Plotter;
+
 struct RunInput {
-  const sim::DriveLog& log;
+  const io::SensorLog& sensors;
+  const eval::TruthLog& truth;  // for scoring only; a pipeline never reads it to estimate
   std::filesystem::path data_dir;
+  std::ostream& out;  // the pipeline's own tables, printed before the scores
+  Plotter* plotter = nullptr;
 };
 
 struct RunOutput {
@@ -31,8 +40,12 @@ struct RunOutput {
 struct RunPipeline {
   std::string_view name;
   std::string_view summary;
+  std::string_view reads;  // the files it reads from DIR (and elsewhere), for --help
+  // Declares the pipeline's own options on its sub-command; the state they fill lives in the
+  // returned object, which run() receives back.
+  std::function<std::shared_ptr<void>(CLI::App& app)> add_options;
   // Returns 0 on success, 1 on a runtime failure (message already written to err).
-  std::function<int(const RunInput& in, RunOutput& out, std::ostream& err)> run;
+  std::function<int(const std::shared_ptr<void>& options, const RunInput& in, RunOutput& out, std::ostream& err)> run;
 };
 
 inline std::vector<RunPipeline>& run_pipelines() {

@@ -5,10 +5,14 @@
 //   replay_tampered(handler, tamper, imu, stream_0, stream_1, ...)
 //
 // merges the streams by time stamp and calls the handler:
-//   handler.propagate(u, dt)  the IMU sample u (the latest at or before the current time) held
-//                             over the next dt > 0 seconds: a measurement between two IMU
-//                             samples splits that interval (propagate to the measurement's time,
-//                             update, propagate the rest), so no rate needs to divide another;
+//   handler.propagate(u, dt)  the IMU rates u in force over the next dt > 0 seconds: a
+//                             measurement between two IMU samples splits that interval
+//                             (propagate to the measurement's time, update, propagate the rest),
+//                             so no rate needs to divide another. Rate samples hold from their
+//                             stamp to the next one's; an increment sample covers the interval
+//                             that ends at its stamp, so over that interval u is its mean rate
+//                             (increment / interval, `increments` false), and the first
+//                             increment sample, whose interval is unknown, only starts the clock;
 //   handler.on(u)             optional, for each IMU sample after the propagation to its time;
 //   handler.on(m)             for each measurement m of stream k, at its time.
 // Ties: an IMU sample comes before the measurements with its stamp (the state is propagated
@@ -234,11 +238,19 @@ ReplayReport<sizeof...(Msgs)> replay_tampered(Handler& handler, Tamper tamper, s
 
     if (imu_cursor.head() && t_imu <= t_meas) {
       propagate_to(t_imu);
-      held = *imu_cursor.head();
+      const ImuSample sample = *imu_cursor.head();
       imu_cursor.accept();
       ++report.imu.delivered;
-      if constexpr (requires { handler.on(*held); }) handler.on(*held);
+      if constexpr (requires { handler.on(sample); }) handler.on(sample);
       imu_cursor.advance(tamper, report.imu);
+      held = sample;
+      // Increments: the next sample's mean rate is what acts until its stamp.
+      if (const ImuSample* next = imu_cursor.head(); next && next->increments) {
+        const double dt = next->t - sample.t;
+        held = ImuSample{sample.t, next->gyro / dt, next->accel / dt, false};
+      } else if (sample.increments) {
+        held.reset();  // the last increment sample: nothing acts after it
+      }
       continue;
     }
     // A measurement, before the next IMU sample (or with no IMU sample left).
