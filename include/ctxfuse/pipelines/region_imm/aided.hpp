@@ -82,7 +82,7 @@ class Aided {
   static constexpr int kTakers = Core::kTakers;
 
   Aided(Core core, const Settings& s, Observer* observer = nullptr)
-      : core_(std::move(core)), s_(s), observer_(observer), integrity_(s) {
+      : core_(std::move(core)), s_(s), observer_(observer), integrity_{s} {
     health_.fill(FilterHealth(s));
   }
 
