@@ -272,6 +272,25 @@ TEST(RegionPipeline, FiltersStartFromTheLogsOwnFixes) {
   EXPECT_GT(a.t, 5.0);
 }
 
+// Where no GNSS fix reaches (all removed here), the filters align on UWB snapshot
+// multilaterations instead: inside the garage, at a stamp time, with a heading within 3 sigma
+// of the true one.
+TEST(RegionPipeline, WithoutGnssTheFiltersAlignOnUwbSnapshots) {
+  io::SensorLog no_gnss = drive().log;
+  no_gnss.gnss.clear();
+  const auto r = ri::run(no_gnss, ri::Estimator::idr, ri::Settings{});
+  ASSERT_TRUE(r.alignment.has_value());
+  const auto& a = *r.alignment;
+  const auto& ranges = drive().log.uwb;
+  EXPECT_TRUE(std::any_of(ranges.begin(), ranges.end(), [&](const io::UwbRange& u) { return u.t == a.t; })) << "not a UWB stamp";
+  const auto k = static_cast<std::size_t>(std::lround(a.t * drive().drive.config.imu.rate_hz));
+  const auto& truth = drive().drive.truth[k];
+  EXPECT_LT((a.position - truth.position.head<2>()).norm(), 1.0);
+  EXPECT_LT(std::abs(std::remainder(a.heading - truth.yaw, 2.0 * std::numbers::pi)), 3.0 * std::sqrt(a.heading_var));
+  ASSERT_FALSE(r.track.t.empty());
+  EXPECT_GE(r.track.t.front(), a.t);
+}
+
 // Motion known from elsewhere (a static alignment, the end of a previous drive): the filters
 // start at the log's first fix with it, not by dynamic alignment.
 TEST(RegionPipeline, KnownMotionStartsAtTheFirstFix) {

@@ -80,8 +80,12 @@ struct Runner {
       est.uwb(r);
       return;
     }
+    // A new stamp completes the previous one (when no IMU sample came between them).
     if (!stamp.empty() && stamp.front().t != r.t) flush_stamp();
-    if (!started) add_to_stamp(stamp, r);
+    if (started)
+      est.uwb(r);
+    else
+      add_to_stamp(stamp, r);
   }
   void on(const io::GnssFix& fix) {
     if (started) {
