@@ -84,7 +84,7 @@ TEST(RunRegionImm, LogsOfTheDemoDrivesGiveTheDemosNumbers) {
   const json p = read_json(run_json)["pipeline"];
   ASSERT_TRUE(d.is_object() && !d.empty());
   const int compared = compare(d, p, "region_imm");
-  EXPECT_GT(compared, 100) << "the demo's region_imm section is smaller than expected";
+  EXPECT_GT(compared, 90) << "the demo's region_imm section is smaller than expected";
 
   // The saved recogniser, loaded without any training data, gives the same numbers again.
   const auto l = run("run region-imm --data \"" + test + "\" --recogniser \"" + rec.string() + "\" --json \"" + loaded_json.string() + "\"");
