@@ -11,6 +11,7 @@ CTXFUSE_DEBIAN_PACKAGES=(
   libeigen3-dev libboost-dev libgtest-dev libbenchmark-dev
   libsvm-dev libsvm-tools libceres-dev gnuplot-nox
   libcli11-dev nlohmann-json3-dev
+  libclang-rt-14-dev  # clang's sanitizer and libFuzzer runtimes (scripts/fuzz.sh)
 )
 
 ctxfuse_missing_packages() {
