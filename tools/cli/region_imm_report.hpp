@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "cli/json.hpp"
+#include "cli/formatted.hpp"
 #include "cli/plot.hpp"
 #include "ctxfuse/eval/region_errors.hpp"
 #include "ctxfuse/eval/truth.hpp"
@@ -56,12 +57,6 @@ inline constexpr std::array<std::array<double, 4>, 3> kPaperRmseX{{{1.22, 1.29, 
 inline constexpr std::array<std::array<double, 4>, 3> kPaperRmseY{{{1.72, 1.80, 2.18, 1.87}, {1.50, 0.89, 1.19, 1.16}, {1.28, 0.49, 0.42, 0.88}}};
 inline constexpr std::array<const char*, 4> kColumn{"outdoor", "transition", "indoor", "overall"};
 
-inline std::string fmt(const char* f, auto... v) {
-  char buf[256];
-  std::snprintf(buf, sizeof buf, f, v...);
-  return buf;
-}
-
 inline void set_row(Json& json, const std::string& prefix, const std::array<double, 4>& v) {
   for (std::size_t k = 0; k < 4; ++k) json.set(prefix + "." + kColumn[k], v[k]);
 }
@@ -81,11 +76,11 @@ inline ri::Track region_imm_report(const RegionImmRun& in, Json& json, std::ostr
   const ri::Recognition r = ri::recognise(rec, features);
   const double acc_svm = ri::accuracy(labels, r.svm), acc_hmm = ri::accuracy(labels, r.hmm), acc_joint = ri::accuracy(labels, r.joint);
   out << "Region recognition (" << features.x.size() << " receiver epochs; " << in.recogniser_note << "; PSO-SVM C="
-      << fmt("%.3g, gamma=%.3g", rec.tuned.C, rec.tuned.gamma) << ", CV score " << fmt("%.2f %%", 100.0 * rec.tuned.cv_accuracy) << ")\n";
+      << formatted("%.3g, gamma=%.3g", rec.tuned.C, rec.tuned.gamma) << ", CV score " << formatted("%.2f %%", 100.0 * rec.tuned.cv_accuracy) << ")\n";
   out << "  classifier   paper    ours\n";
-  out << "  PSO-SVM    " << fmt("%6.2f %%  %6.2f %%\n", 95.96, 100.0 * acc_svm);
-  out << "  HMM        " << fmt("%6.2f %%  %6.2f %%\n", 88.56, 100.0 * acc_hmm);
-  out << "  joint      " << fmt("%6.2f %%  %6.2f %%\n", 98.09, 100.0 * acc_joint);
+  out << "  PSO-SVM    " << formatted("%6.2f %%  %6.2f %%\n", 95.96, 100.0 * acc_svm);
+  out << "  HMM        " << formatted("%6.2f %%  %6.2f %%\n", 88.56, 100.0 * acc_hmm);
+  out << "  joint      " << formatted("%6.2f %%  %6.2f %%\n", 98.09, 100.0 * acc_joint);
   json.set("recognition_accuracy.svm", acc_svm);
   json.set("recognition_accuracy.hmm", acc_hmm);
   json.set("recognition_accuracy.joint", acc_joint);
@@ -107,7 +102,7 @@ inline ri::Track region_imm_report(const RegionImmRun& in, Json& json, std::ostr
   if (runs[0].alignment) {
     const auto& a = *runs[0].alignment;
     constexpr double deg = 180.0 / std::numbers::pi;
-    out << fmt("Start: dynamic alignment at t = %.1f s (heading %.1f +/- %.1f deg from two fixes)\n", a.t, a.heading * deg,
+    out << formatted("Start: dynamic alignment at t = %.1f s (heading %.1f +/- %.1f deg from two fixes)\n", a.t, a.heading * deg,
                std::sqrt(a.heading_var) * deg);
     json.set("start.t_s", a.t);
     json.set("start.heading_deg", a.heading * deg);
@@ -139,21 +134,21 @@ inline ri::Track region_imm_report(const RegionImmRun& in, Json& json, std::ostr
   out << "Mean horizontal position error (m), paper | ours, per true region (scored at " << errs[0].count[3] << " receiver epochs)\n";
   out << "  method         outdoor       transition    indoor        overall\n";
   for (std::size_t i = 0; i < kPaperMean.size(); ++i) {
-    out << fmt("  %-12s", kPaperMean[i].label);
-    for (std::size_t k = 0; k < 4; ++k) out << fmt("  %5.2f|%5.2f ", kPaperMean[i].mean[k], errs[i].mean[k]);
+    out << formatted("  %-12s", kPaperMean[i].label);
+    for (std::size_t k = 0; k < 4; ++k) out << formatted("  %5.2f|%5.2f ", kPaperMean[i].mean[k], errs[i].mean[k]);
     out << "\n";
     set_row(json, std::string("mean_error_m.") + ri::name(kPaperMean[i].estimator), errs[i].mean);
   }
   out << "  (true labels)";
-  for (std::size_t k = 0; k < 4; ++k) out << fmt("   --  |%5.2f ", oracle.mean[k]);
+  for (std::size_t k = 0; k < 4; ++k) out << formatted("   --  |%5.2f ", oracle.mean[k]);
   out << "\n";
   set_row(json, "mean_error_m.region_imm_true_labels", oracle.mean);
   out << "  (FKF static) ";
-  for (std::size_t k = 0; k < 4; ++k) out << fmt("   --  |%5.2f ", fkf_static.mean[k]);
+  for (std::size_t k = 0; k < 4; ++k) out << formatted("   --  |%5.2f ", fkf_static.mean[k]);
   out << "   FKF with fixed fusion weights beta_i (the paper's reading)\n";
   set_row(json, "mean_error_m.fkf_static", fkf_static.mean);
-  out << fmt("  (+ pull %.1f)", settings.posterior_pull);
-  for (std::size_t k = 0; k < 4; ++k) out << fmt("   --  |%5.2f ", pulled.mean[k]);
+  out << formatted("  (+ pull %.1f)", settings.posterior_pull);
+  for (std::size_t k = 0; k < 4; ++k) out << formatted("   --  |%5.2f ", pulled.mean[k]);
   out << "   region IMM + HMM posterior pull (extension)\n";
   set_row(json, "mean_error_m.region_imm_posterior", pulled.mean);
   // The rows above score a single sensor without a solution at the position it holds; here
@@ -161,10 +156,10 @@ inline ri::Track region_imm_report(const RegionImmRun& in, Json& json, std::ostr
   // scored the epochs without one).
   out << "  single sensors where they have a solution: mean error (m) / share of epochs\n";
   for (std::size_t i : {0u, 1u}) {
-    out << fmt("  %-12s", kPaperMean[i].label);
+    out << formatted("  %-12s", kPaperMean[i].label);
     for (std::size_t k = 0; k < 4; ++k) {
       const double m = errs[i].mean_with_solution[k], a = errs[i].availability(k);
-      out << (errs[i].with_solution[k] ? fmt("  %5.2f/%3.0f%%", m, 100.0 * a) : fmt("     --/%3.0f%%", 100.0 * a));
+      out << (errs[i].with_solution[k] ? formatted("  %5.2f/%3.0f%%", m, 100.0 * a) : formatted("     --/%3.0f%%", 100.0 * a));
       json.set(std::string("mean_error_with_solution_m.") + ri::name(kPaperMean[i].estimator) + "." + kColumn[k], m);
       json.set(std::string("availability.") + ri::name(kPaperMean[i].estimator) + "." + kColumn[k], a);
     }
@@ -175,10 +170,10 @@ inline ri::Track region_imm_report(const RegionImmRun& in, Json& json, std::ostr
     out << (axis == 0 ? "X" : "Y") << " RMSE (m), paper | ours\n";
     for (std::size_t k = 0; k < 3; ++k) {
       const std::size_t i = rmse_rows[k];
-      out << fmt("  %-12s", kPaperMean[i].label);
+      out << formatted("  %-12s", kPaperMean[i].label);
       const auto& paper = axis == 0 ? kPaperRmseX[k] : kPaperRmseY[k];
       const auto& ours = axis == 0 ? errs[i].rmse_x : errs[i].rmse_y;
-      for (std::size_t c = 0; c < 4; ++c) out << fmt("  %5.2f|%5.2f ", paper[c], ours[c]);
+      for (std::size_t c = 0; c < 4; ++c) out << formatted("  %5.2f|%5.2f ", paper[c], ours[c]);
       out << "\n";
       set_row(json, std::string(axis == 0 ? "rmse_x_m." : "rmse_y_m.") + ri::name(kPaperMean[i].estimator), ours);
     }
@@ -190,7 +185,7 @@ inline ri::Track region_imm_report(const RegionImmRun& in, Json& json, std::ostr
   out << "Paper's ordering: region IMM < IMM < FKF overall: " << (order_overall ? "holds" : "does NOT hold")
       << "; in the transition region: " << (order_transition ? "holds" : "does NOT hold")
       << "; recognition joint > SVM > HMM: " << (order_recognition ? "holds" : "does NOT hold") << "\n";
-  out << fmt("  overall improvement of region IMM over FKF %.1f %% (paper 43.75 %%), over IMM %.1f %% (paper 22.30 %%)\n",
+  out << formatted("  overall improvement of region IMM over FKF %.1f %% (paper 43.75 %%), over IMM %.1f %% (paper 22.30 %%)\n",
              100.0 * (fkf - prop) / fkf, 100.0 * (imm - prop) / imm);
   // What routing can act on: it keeps UWB from the sub-models outdoors and GNSS indoors, so
   // it can only matter where the log has UWB ranges outdoors or GNSS fixes indoors.

@@ -59,7 +59,7 @@ SeedResult study_seed(const sim::DriveConfig& cfg, const ri::Settings& s, std::o
   std::map<std::pair<double, int>, bool> nlos;
   for (const auto& u : test.uwb) nlos[{u.t, u.anchor_id}] = u.nlos;
 
-  out << fmt("\n=== seed %llu  (approach mouth at x = %.1f m; drive %.0f s)\n", static_cast<unsigned long long>(cfg.seed), zones.mouth_x,
+  out << formatted("\n=== seed %llu  (approach mouth at x = %.1f m; drive %.0f s)\n", static_cast<unsigned long long>(cfg.seed), zones.mouth_x,
              test.duration());
   json["seed"] = static_cast<double>(cfg.seed);
   json["approach_mouth_x_m"] = zones.mouth_x;
@@ -78,7 +78,7 @@ SeedResult study_seed(const sim::DriveConfig& cfg, const ri::Settings& s, std::o
   report_gates("FKF", g_fkf, 1, out, json["gates"]["fkf"]);
   report_gates("IMM", g_imm, kMaxTakers, out, json["gates"]["imm"]);
   report_gates("regionIMM", g_rimm, kMaxTakers, out, json["gates"]["region_imm"]);
-  out << fmt("  UWB integrity re-anchorings (policies/integrity.hpp): FKF %d, IMM %d, region IMM %d\n", t_fkf.integrity_faults,
+  out << formatted("  UWB integrity re-anchorings (policies/integrity.hpp): FKF %d, IMM %d, region IMM %d\n", t_fkf.integrity_faults,
              t_imm.integrity_faults, t_rimm.integrity_faults);
   json["integrity_faults"]["fkf"] = t_fkf.integrity_faults;
   json["integrity_faults"]["imm"] = t_imm.integrity_faults;
@@ -109,11 +109,11 @@ SeedResult study_seed(const sim::DriveConfig& cfg, const ri::Settings& s, std::o
   }};
   out << "  mean horizontal error (m) at the GNSS epochs, per true region: outdoor transition indoor overall\n";
   for (const auto& row : rows) {
-    out << fmt("    %-14s %7.3f %7.3f %7.3f %7.3f\n", row.label, row.e.mean[0], row.e.mean[1], row.e.mean[2], row.e.mean[3]);
+    out << formatted("    %-14s %7.3f %7.3f %7.3f %7.3f\n", row.label, row.e.mean[0], row.e.mean[1], row.e.mean[2], row.e.mean[3]);
     for (std::size_t k = 0; k < 4; ++k) json["mean_error_m"][row.key][kRegionColumn[k]] = row.e.mean[k];
   }
   const double a_svm = ri::accuracy(labels, r.svm), a_hmm = ri::accuracy(labels, r.hmm), a_joint = ri::accuracy(labels, r.joint);
-  out << fmt("  region recognition accuracy SVM/HMM/joint %.2f/%.2f/%.2f %%\n", 100.0 * a_svm, 100.0 * a_hmm, 100.0 * a_joint);
+  out << formatted("  region recognition accuracy SVM/HMM/joint %.2f/%.2f/%.2f %%\n", 100.0 * a_svm, 100.0 * a_hmm, 100.0 * a_joint);
   json["recognition_accuracy"]["svm"] = a_svm;
   json["recognition_accuracy"]["hmm"] = a_hmm;
   json["recognition_accuracy"]["joint"] = a_joint;
@@ -132,7 +132,7 @@ void report_summary(const std::vector<SeedResult>& results, std::string_view hea
   std::array<double, 6> sum{};
   Json rows = Json::array();
   for (const auto& r : results) {
-    out << fmt("  %4llu |        %6.3f  %6.3f  %6.3f  %-8s |           %6.3f  %6.3f  %6.3f  %s\n", static_cast<unsigned long long>(r.seed),
+    out << formatted("  %4llu |        %6.3f  %6.3f  %6.3f  %-8s |           %6.3f  %6.3f  %6.3f  %s\n", static_cast<unsigned long long>(r.seed),
                r.fkf.mean[3], r.imm.mean[3], r.region_imm.mean[3], r.overall_holds ? "holds" : "no", r.fkf.mean[1], r.imm.mean[1],
                r.region_imm.mean[1], r.transition_holds ? "holds" : "no");
     overall += r.overall_holds ? 1 : 0;
@@ -152,9 +152,9 @@ void report_summary(const std::vector<SeedResult>& results, std::string_view hea
     rows.push_back(std::move(row));
   }
   const double n = static_cast<double>(results.size());
-  out << fmt("  mean |        %6.3f  %6.3f  %6.3f  %2d/%-5zu |           %6.3f  %6.3f  %6.3f  %d/%zu\n", sum[0] / n, sum[1] / n, sum[2] / n,
+  out << formatted("  mean |        %6.3f  %6.3f  %6.3f  %2d/%-5zu |           %6.3f  %6.3f  %6.3f  %d/%zu\n", sum[0] / n, sum[1] / n, sum[2] / n,
              overall, results.size(), sum[3] / n, sum[4] / n, sum[5] / n, transition, results.size());
-  out << fmt("ordering holds overall on %d/%zu seeds, in the transition region on %d/%zu\n", overall, results.size(), transition,
+  out << formatted("ordering holds overall on %d/%zu seeds, in the transition region on %d/%zu\n", overall, results.size(), transition,
              results.size());
   json["seeds"] = std::move(rows);
   json["mean_over_seeds"]["overall"]["fkf"] = sum[0] / n;
@@ -200,7 +200,7 @@ int region_study(Args args, std::ostream& out, std::ostream& err) {
   ri::Settings settings;
   if (ungated) settings.gate_probability = 1.0;
   settings.uwb_integrity = !no_integrity;
-  const std::string header = "scenario " + scenario + ", " + (ungated ? std::string("ungated") : fmt("gate %g", settings.gate_probability)) +
+  const std::string header = "scenario " + scenario + ", " + (ungated ? std::string("ungated") : formatted("gate %g", settings.gate_probability)) +
                              (no_integrity ? ", no integrity check" : "");
   out << "region study: " << header << "\n";
   Json doc;

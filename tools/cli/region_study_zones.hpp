@@ -21,6 +21,7 @@
 #include <utility>
 
 #include "cli/json.hpp"
+#include "cli/formatted.hpp"
 #include "ctxfuse/eval/truth.hpp"
 #include "ctxfuse/pipelines/region_imm.hpp"
 #include "ctxfuse/sim/drive.hpp"
@@ -32,12 +33,6 @@ namespace ri = pipelines::region_imm;
 inline constexpr int kZones = 6;
 inline constexpr std::array<const char*, kZones> kZoneName{"out-far", "out-near", "tr-mouth", "tr-door", "in-door10", "in-deep"};
 inline constexpr double kNearMouthM = 30.0, kDoorDepthM = 10.0;
-
-inline std::string fmt(const char* f, auto... v) {
-  char buf[512];
-  std::snprintf(buf, sizeof buf, f, v...);
-  return buf;
-}
 
 // ------------------------------------------------------------------ zones
 struct Zoning {
@@ -112,7 +107,7 @@ inline void report_picture(const Picture& p, std::ostream& out, Json& json) {
     const double fix_err = mean(z.fix_error_sum, z.fixes), mp = mean(z.multipath_sum, z.fixes);
     const double per_epoch = mean(z.ranges, z.uwb_epochs), nlos_share = mean(z.nlos, z.ranges);
     const double bias = mean(z.nlos_bias_sum, z.nlos), range_err = mean(z.range_error_sum, z.ranges);
-    out << fmt("  %-10s %6d %6d  %6.2f  %5.2f  | %5d  %5.2f  %5.1f  %5.2f (%5.2f)    %6.2f    %s\n", kZoneName[static_cast<std::size_t>(k)],
+    out << formatted("  %-10s %6d %6d  %6.2f  %5.2f  | %5d  %5.2f  %5.1f  %5.2f (%5.2f)    %6.2f    %s\n", kZoneName[static_cast<std::size_t>(k)],
                z.gnss_epochs, z.fixes, fix_err, mp, z.uwb_epochs, per_epoch, 100.0 * nlos_share, bias, z.nlos_bias_max, range_err,
                anchors.empty() ? "-" : anchors.c_str());
     Json& j = json[kZoneName[static_cast<std::size_t>(k)]];
@@ -174,7 +169,7 @@ inline void report_gates(const char* label, const GateTable& table, int taker_co
     for (int j = 0; j < taker_count; ++j) {
       const auto& row = table[static_cast<std::size_t>(src)][static_cast<std::size_t>(j)];
       const char* taker = taker_count > 1 ? kImmTaker[static_cast<std::size_t>(j)] : "";
-      out << fmt("    %-10s %s%s%-4s:", label, src == 0 ? "GNSS" : "UWB ", taker_count > 1 ? "/" : "", taker);
+      out << formatted("    %-10s %s%s%-4s:", label, src == 0 ? "GNSS" : "UWB ", taker_count > 1 ? "/" : "", taker);
       Json& jt = taker_count > 1 ? json[src == 0 ? "gnss" : "uwb"][taker] : json[src == 0 ? "gnss" : "uwb"];
       if (std::none_of(row.begin(), row.end(), [](const ZoneGates& z) { return z.offered > 0; })) {
         out << " (never offered)\n";
@@ -183,14 +178,14 @@ inline void report_gates(const char* label, const GateTable& table, int taker_co
       }
       for (int k = 0; k < kZones; ++k) {
         const auto& z = row[static_cast<std::size_t>(k)];
-        out << fmt("  %s %d/%d", kZoneName[static_cast<std::size_t>(k)], z.gated, z.offered);
+        out << formatted("  %s %d/%d", kZoneName[static_cast<std::size_t>(k)], z.gated, z.offered);
         Json& jz = jt[kZoneName[static_cast<std::size_t>(k)]];
         jz["offered"] = z.offered;
         jz["gated"] = z.gated;
         if (src == 1) {
           jz["nlos_offered"] = z.nlos_offered;
           jz["nlos_accepted"] = z.nlos_accepted;
-          if (z.nlos_offered > 0) out << fmt(" (nlos acc %d/%d)", z.nlos_accepted, z.nlos_offered);
+          if (z.nlos_offered > 0) out << formatted(" (nlos acc %d/%d)", z.nlos_accepted, z.nlos_offered);
         }
       }
       out << '\n';
