@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Configures, builds and runs the whole test suite:  scripts/test.sh [preset]
-# preset: release (default, g++), clang, release-v3, clang-v3 or debug-asan (see
+# preset: release (default, g++), clang, release-v3, clang-v3, debug-asan or clang-asan (see
 # CMakePresets.json); build tree build/<preset>. Prints ctest's summary; the exit status is
 # ctest's (or the build's, when the build fails). Honours CTXFUSE_DATA_DIR (the shared/data
 # folder; default ../shared/data next to the repository) and CI=true (missing data fails
