@@ -99,4 +99,44 @@ class MonteCarloAverage {
   std::size_t failures_ = 0;
 };
 
+/// One statistic (NEES or NIS) of a Monte Carlo set against its chi-square bands.
+///   per-epoch: the run-average at each epoch against the band of `runs` chi-square(dof)
+///     values. For a consistent filter each epoch's average lies inside with probability
+///     `probability`; neighbouring epochs are correlated, so the fraction inside scatters more
+///     than a binomial count would.
+///   time average: the average over every epoch and run against the band of that many
+///     chi-square(dof) values. Exact for the NIS of a consistent linear-Gaussian filter (its
+///     innovations are white, so independent over time); for the NEES, whose errors are
+///     correlated over time, this band is narrower than the statistic's true spread and is
+///     reported, not tested.
+struct BandCheck {
+  ChiSquareBand epoch_band, time_band;
+  double fraction_inside = 0.0;  // share of epochs whose run-average lies in epoch_band
+  double time_average = std::numeric_limits<double>::quiet_NaN();
+  std::size_t failures = 0;      // non-finite values (a failed filter step)
+
+  bool epochs_inside(double min_fraction) const { return failures == 0 && fraction_inside >= min_fraction; }
+  bool time_average_inside() const { return failures == 0 && time_band.contains(time_average); }
+};
+
+/// `stat` against the bands of chi-square(dof), with `runs` runs per epoch (every epoch must
+/// have that many values: a Monte Carlo set with missing runs is refused with
+/// std::invalid_argument rather than judged against the wrong band).
+inline BandCheck check_bands(const MonteCarloAverage& stat, int dof, int runs, double probability = 0.95) {
+  std::size_t values = 0;
+  for (std::size_t k = 0; k < stat.steps(); ++k) {
+    if (stat.runs_at(k) != static_cast<std::size_t>(runs))
+      throw std::invalid_argument("check_bands: epoch " + std::to_string(k) + " has " + std::to_string(stat.runs_at(k)) +
+                                  " values, not " + std::to_string(runs));
+    values += stat.runs_at(k);
+  }
+  BandCheck c;
+  c.epoch_band = average_chi_square_band(dof, runs, probability);
+  c.time_band = average_chi_square_band(dof, static_cast<int>(values), probability);
+  c.fraction_inside = stat.fraction_inside(c.epoch_band);
+  c.time_average = stat.overall_average();
+  c.failures = stat.failures();
+  return c;
+}
+
 }  // namespace ctxfuse::eval
