@@ -1,7 +1,7 @@
 // The EKF's steps fed arbitrary bytes as numbers: prior mean and covariance, measurement
 // matrix or anchor, noise, measurement and time step all come from the input. Whatever the
 // numbers, a step must return a Status (no crash, no sanitizer report), and
-//  - accepted: the belief is finite (from a finite prior, see check) and its covariance
+//  - accepted: the belief is finite (whatever the prior) and its covariance
 //    exactly symmetric (the filter mirrors it), the NIS non-negative and within the gate;
 //  - anything else: the belief bit-for-bit unchanged (filters/ekf.hpp promises it).
 // Numbers are decoded two ways (first byte, bit 0): raw IEEE doubles, which reach NaN, Inf,
@@ -63,11 +63,10 @@ bool finite(const Gaussian<N>& b) {
 template <int N>
 void check(const Status& s, const Gaussian<N>& before, const Gaussian<N>& after, bool is_update) {
   if (s.accepted()) {
-    // Only from a finite prior: the steps do not validate the prior belief, so a NaN in a
-    // state the measurement does not see (a velocity under a range update) is carried
-    // through an accepted update (input non-finite-prior-accepted; reported, filters/ is
-    // not this target's to fix; docs/reliability.md, fuzzing).
-    if (finite(before) && !finite(after)) fail("accepted step left a non-finite belief from a finite prior");
+    // From any prior: a non-finite prior mean is refused (non_finite_prior), a non-finite
+    // prior covariance makes the posterior's non-finite, which is refused too (the saved
+    // input non-finite-prior-accepted is the case that used to pass).
+    if (!finite(after)) fail("accepted step left a non-finite belief");
     if (after.cov != after.cov.transpose()) fail("accepted step left an asymmetric covariance");
     // Not "finite": without a gate (threshold +inf) an update whose NIS overflows to +inf
     // is accepted, a finite belief all the same (input ungated-infinite-nis).

@@ -116,16 +116,33 @@ TEST(BadInput, NumericalFailuresLeaveTheBeliefUnchanged) {
   expect_rejected_unchanged(ekf::update<4>(pos, b, Vector<2>(1.0, 2.0)), Outcome::numerical_failure,
                             Problem::innovation_not_positive_definite, before, b);
 
-  Gaussian<4> c = prior();
-  c.mean(0) = kNaN;  // a NaN state makes the prediction non-finite
-  const Gaussian<4> before_c = c;
-  Status s = ekf::update<4>(pos, c, Vector<2>(1.0, 2.0));
-  EXPECT_EQ(s.outcome, Outcome::numerical_failure);
-  EXPECT_EQ(s.problem, Problem::non_finite_prediction);
-  EXPECT_TRUE(same_bytes(before_c, c));
-  s = ekf::predict(Cv{}, c, {}, 0.1);
-  EXPECT_EQ(s.problem, Problem::non_finite_prediction);
-  EXPECT_TRUE(same_bytes(before_c, c));
+  // Finite terms whose sum overflows: a velocity near the largest double, correlated with the
+  // position, so that a far (but finite) position fix corrects it past DBL_MAX.
+  Gaussian<4> big = prior();
+  big.mean(2) = 1.7e308;
+  big.cov(0, 2) = big.cov(2, 0) = 1.0;
+  big.cov(2, 2) = 2.0;
+  models::BlockObservation<L, "p"> tight;
+  tight.R = SquareMatrix<2>::Identity() * 1e-6;
+  const Gaussian<4> before_big = big;
+  const FilterOptions any_magnitude{.max_abs_measurement = std::numeric_limits<double>::max()};
+  expect_rejected_unchanged(ekf::update<4>(tight, big, Vector<2>(1e308, 2.0), NoGate{}, any_magnitude),
+                            Outcome::numerical_failure, Problem::non_finite_state, before_big, big);
+}
+
+TEST(BadInput, NonFinitePriorMeanIsRefusedByBothSteps) {
+  models::BlockObservation<L, "p"> pos;
+  for (int k : {0, 3}) {  // observed by the position update, and not (a velocity)
+    for (double bad : {kNaN, kInf}) {
+      Gaussian<4> c = prior();
+      c.mean(k) = bad;
+      const Gaussian<4> before = c;
+      expect_rejected_unchanged(ekf::update<4>(pos, c, Vector<2>(1.0, 2.0)), Outcome::invalid_input,
+                                Problem::non_finite_prior, before, c);
+      expect_rejected_unchanged(ekf::predict(Cv{}, c, {}, 0.1), Outcome::invalid_input, Problem::non_finite_prior,
+                                before, c);
+    }
+  }
 }
 
 struct EskfFixture : ::testing::Test {

@@ -38,6 +38,7 @@ enum class Problem : std::uint8_t {
   innovation_not_positive_definite,
   non_finite_covariance,
   non_finite_state,
+  non_finite_prior,  // the belief handed to a step holds NaN or Inf (the caller's; invalid input)
   covariance_not_positive_definite,  // a covariance that must be is not: a caller-supplied one
                                      // (e.g. a reset; invalid input) or a filter's own (fusion;
                                      // numerical failure)
@@ -51,10 +52,13 @@ enum class Problem : std::uint8_t {
   transition_matrix_not_stochastic,  // the mixing policy's matrix: negative, NaN or a row sum != 1
   mode_probabilities_vanished,       // c_j = sum_i p_ij mu_i not finite or zero for every j
   local_filter_index_out_of_range,   // a federated filter's local filter index
+  // Factor-graph smoothers (filters/fixed_lag.hpp).
+  system_not_positive_definite,  // the window's normal equations (or the block being
+                                 // marginalised) are not positive definite
 };
 
 /// The last Problem, for code that walks them all (keep it the last enumerator above).
-inline constexpr Problem last_problem = Problem::local_filter_index_out_of_range;
+inline constexpr Problem last_problem = Problem::system_not_positive_definite;
 
 constexpr std::string_view describe(Problem p) {
   switch (p) {
@@ -77,11 +81,13 @@ constexpr std::string_view describe(Problem p) {
     case Problem::innovation_not_positive_definite: return "innovation covariance is not positive definite";
     case Problem::non_finite_covariance: return "updated covariance contains NaN or Inf";
     case Problem::non_finite_state: return "updated state contains NaN or Inf";
+    case Problem::non_finite_prior: return "prior belief contains NaN or Inf";
     case Problem::covariance_not_positive_definite: return "covariance is not positive definite";
     case Problem::imm_cycle_not_closed: return "IMM cycle not closed: mix() called again before update_mode_probabilities()";
     case Problem::transition_matrix_not_stochastic: return "mode transition matrix is not row-stochastic";
     case Problem::mode_probabilities_vanished: return "predicted mode probabilities are not finite or all zero";
     case Problem::local_filter_index_out_of_range: return "local filter index out of range";
+    case Problem::system_not_positive_definite: return "normal equations of the window are not positive definite";
     case Problem::too_few_measurements: return "fewer measurements than unknowns";
     case Problem::degenerate_geometry: return "geometry too poor to solve (nearly singular normal equations)";
     case Problem::not_converged: return "the solution did not converge";

@@ -26,6 +26,7 @@ Status predict(const Model& model, Gaussian<Model::dim>& belief, const typename 
   if (Problem p = check_dt(dt, opts); p != Problem::none) return Status::invalid(p);
   if (Problem p = check_input(u, opts); p != Problem::none) return Status::invalid(p);
   if (Problem p = detail::model_input_check(model, u); p != Problem::none) return Status::invalid(p);
+  if (!all_finite(belief.mean)) return Status::invalid(Problem::non_finite_prior);
 
   const SquareMatrix<N> Q = model.noise(belief.mean, u, dt);
   if (Problem p = check_process_noise(Q); p != Problem::none) return Status::invalid(p);
@@ -56,6 +57,10 @@ Status update(const Meas& meas, Gaussian<N>& belief, const Vector<Meas::dim>& z,
   const SquareMatrix<M> R = meas.noise(belief.mean);
   if (Problem p = check_measurement<M>(z, R, opts); p != Problem::none) return Status::invalid(p);
   if (Problem p = detail::model_check(meas, z); p != Problem::none) return Status::invalid(p);
+  // The posterior covariance is checked after the correction, which catches a NaN anywhere in
+  // the prior's; a NaN in a component of the mean that the measurement does not see would
+  // otherwise pass through an accepted update.
+  if (!all_finite(belief.mean)) return Status::invalid(Problem::non_finite_prior);
 
   Matrix<M, N> H;
   const Vector<M> z_pred = meas.predict(belief.mean, &H);
@@ -66,7 +71,9 @@ Status update(const Meas& meas, Gaussian<N>& belief, const Vector<Meas::dim>& z,
   Status status = detail::kalman_correction<Meas, N, M>(belief.cov, H, y, R, gate, dx, P);
   if (!status.accepted()) return status;
   if (!detail::finish_covariance(P)) return Status::failure(Problem::non_finite_covariance);
-  belief.mean += dx;
+  const Vector<N> x = belief.mean + dx;  // finite terms can still overflow near 1e308
+  if (!all_finite(x)) return Status::failure(Problem::non_finite_state);
+  belief.mean = x;
   belief.cov = P;
   return status;
 }
