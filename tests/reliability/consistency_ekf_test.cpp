@@ -15,7 +15,6 @@
 #include "ctxfuse/core/layout.hpp"
 #include "ctxfuse/filters/ekf.hpp"
 #include "ctxfuse/models/kinematic.hpp"
-#include "ctxfuse/sim/random.hpp"
 
 namespace {
 using namespace ctxfuse;
@@ -43,7 +42,7 @@ reliability::Verdict monte_carlo(double filter_psd_factor) {
   eval::MonteCarloAverage nees(epochs), nis(epochs);
   for (int r = 0; r < runs; ++r) {
     sim::Rng rng(20261201u + static_cast<std::uint64_t>(r));
-    auto normal4 = [&] { return Vector<4>(rng.normal(), rng.normal(), rng.normal(), rng.normal()); };
+    auto normal4 = [&] { return reliability::standard_normal<4>(rng); };
     Gaussian<4> prior;
     prior.mean << 0.0, 5.0, 1.0, 0.5;
     prior.cov = prior_sd.cwiseProduct(prior_sd).asDiagonal();

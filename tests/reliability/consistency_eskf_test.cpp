@@ -13,7 +13,6 @@
 #include "consistency_report.hpp"
 #include "ctxfuse/filters/eskf.hpp"
 #include "ctxfuse/models/ins.hpp"
-#include "ctxfuse/sim/random.hpp"
 
 namespace {
 using namespace ctxfuse;
@@ -48,7 +47,7 @@ Ins15Model scaled(Ins15Model m, double q_factor) {
 Eigen::Vector3d true_rate(double t) { return {0.05 * std::sin(0.3 * t), 0.04 * std::cos(0.2 * t), 0.15 * std::sin(0.1 * t)}; }
 Eigen::Vector3d true_accel_n(double t) { return {0.6 * std::sin(0.2 * t), 0.5 * std::cos(0.15 * t), 0.1 * std::sin(0.5 * t)}; }
 
-Vector<3> normal3(sim::Rng& rng) { return {rng.normal(), rng.normal(), rng.normal()}; }
+Vector<3> normal3(sim::Rng& rng) { return reliability::standard_normal<3>(rng); }
 
 reliability::Verdict monte_carlo(double q_factor) {
   const Ins15Model truth_model = imu_model();

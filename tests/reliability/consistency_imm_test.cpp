@@ -32,7 +32,6 @@
 #include "ctxfuse/filters/imm.hpp"
 #include "ctxfuse/models/kinematic.hpp"
 #include "ctxfuse/policies/mixing.hpp"
-#include "ctxfuse/sim/random.hpp"
 
 namespace {
 using namespace ctxfuse;
@@ -86,7 +85,7 @@ ImmOutcome monte_carlo(double q_factor) {
   int transition_count = 0;
   for (int r = 0; r < runs; ++r) {
     sim::Rng rng(20261203u + static_cast<std::uint64_t>(r));
-    auto normal4 = [&] { return Vector<4>(rng.normal(), rng.normal(), rng.normal(), rng.normal()); };
+    auto normal4 = [&] { return reliability::standard_normal<4>(rng); };
     Gaussian<4> prior;
     prior.mean << 0.0, 0.0, 2.0, 1.0;
     prior.cov = prior_sd.cwiseProduct(prior_sd).asDiagonal();
@@ -100,7 +99,7 @@ ImmOutcome monte_carlo(double q_factor) {
     for (int k = 0; k < epochs; ++k) {
       const bool fast = manoeuvring(k);
       x = quiet.predict(x, {}, dt, nullptr) + (fast ? chol_manoeuvre : chol_quiet) * normal4();
-      const Vector<2> z = L::get<"p">(x) + fix_sigma * Vector<2>(rng.normal(), rng.normal());
+      const Vector<2> z = L::get<"p">(x) + fix_sigma * reliability::standard_normal<2>(rng);
       EXPECT_TRUE(f.mix().accepted());
       EXPECT_TRUE(f.predict({}, dt).accepted());
       // NIS of the combined prediction, written out: S = H P H' + R with H picking "p".

@@ -7,7 +7,9 @@
 #include <cstdio>
 #include <string>
 
+#include "ctxfuse/core/types.hpp"
 #include "ctxfuse/eval/consistency.hpp"
+#include "ctxfuse/sim/random.hpp"
 
 namespace ctxfuse::reliability {
 
@@ -26,6 +28,16 @@ struct Verdict {
            nis.time_average_inside();
   }
 };
+
+/// N standard normal draws, in index order. Not Vector<N>(rng.normal(), ...): the order in
+/// which function arguments are evaluated is unspecified (g++ goes right to left, clang left
+/// to right), so the same seed would give each compiler other runs.
+template <int N>
+Vector<N> standard_normal(sim::Rng& rng) {
+  Vector<N> v;
+  for (int i = 0; i < N; ++i) v(i) = rng.normal();
+  return v;
+}
 
 inline void print_check(const std::string& what, const char* stat, const eval::BandCheck& c) {
   std::printf("%s %s: epochs inside [%.3f, %.3f] %.3f, time average %.4f (band [%.4f, %.4f]), failures %zu\n",
