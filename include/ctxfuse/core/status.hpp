@@ -55,10 +55,11 @@ enum class Problem : std::uint8_t {
   // Factor-graph smoothers (filters/fixed_lag.hpp).
   system_not_positive_definite,  // the window's normal equations (or the block being
                                  // marginalised) are not positive definite
+  measurement_count_above_capacity,  // more measurements in an epoch than its fixed slots
 };
 
 /// The last Problem, for code that walks them all (keep it the last enumerator above).
-inline constexpr Problem last_problem = Problem::system_not_positive_definite;
+inline constexpr Problem last_problem = Problem::measurement_count_above_capacity;
 
 constexpr std::string_view describe(Problem p) {
   switch (p) {
@@ -88,6 +89,7 @@ constexpr std::string_view describe(Problem p) {
     case Problem::mode_probabilities_vanished: return "predicted mode probabilities are not finite or all zero";
     case Problem::local_filter_index_out_of_range: return "local filter index out of range";
     case Problem::system_not_positive_definite: return "normal equations of the window are not positive definite";
+    case Problem::measurement_count_above_capacity: return "more measurements than the epoch's fixed slots";
     case Problem::too_few_measurements: return "fewer measurements than unknowns";
     case Problem::degenerate_geometry: return "geometry too poor to solve (nearly singular normal equations)";
     case Problem::not_converged: return "the solution did not converge";

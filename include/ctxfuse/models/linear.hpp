@@ -1,5 +1,6 @@
 // Linear-Gaussian models: the matrices are the data. With these the EKF is the textbook
-// Kalman filter, which is what the closed-form tests compare against.
+// Kalman filter, which is what the closed-form tests compare against. value<T> is the same
+// map on any scalar (ceres::Jet), for the factor adapters (filters/factors.hpp).
 #pragma once
 
 #include "ctxfuse/core/types.hpp"
@@ -17,14 +18,18 @@ struct LinearProcess {
   Matrix<N, (U == 0 ? 1 : U)> B = Matrix<N, (U == 0 ? 1 : U)>::Zero();
   SquareMatrix<N> Q = SquareMatrix<N>::Zero();
 
-  State predict(const State& x, const Input& u, double /*dt*/, SquareMatrix<N>* J) const {
-    if (J) *J = F;
+  template <class T>
+  Vector<N, T> value(const Vector<N, T>& x, const Input& u, double /*dt*/) const {
     if constexpr (U == 0) {
       (void)u;
-      return F * x;
+      return F.template cast<T>() * x;
     } else {
-      return F * x + B * u;
+      return F.template cast<T>() * x + (B * u).template cast<T>();
     }
+  }
+  State predict(const State& x, const Input& u, double dt, SquareMatrix<N>* J) const {
+    if (J) *J = F;
+    return value<double>(x, u, dt);
   }
   SquareMatrix<N> noise(const State&, const Input&, double) const { return Q; }
 };
@@ -36,9 +41,13 @@ struct LinearMeasurement {
   Matrix<M, N> H = Matrix<M, N>::Zero();
   SquareMatrix<M> R = SquareMatrix<M>::Identity();
 
+  template <class T>
+  Vector<M, T> value(const Vector<N, T>& x) const {
+    return H.template cast<T>() * x;
+  }
   Vector<M> predict(const Vector<N>& x, Matrix<M, N>* J) const {
     if (J) *J = H;
-    return H * x;
+    return value<double>(x);
   }
   SquareMatrix<M> noise(const Vector<N>&) const { return R; }
 };

@@ -1,0 +1,223 @@
+// The block-tridiagonal normal equations, their block Cholesky solve, the marginal
+// covariance of the last state and the Schur-complement marginalisation, each against the
+// same quantity computed plainly with dense Eigen from the stacked Jacobian; and an EKF
+// update against one Gauss-Newton step on the same factors.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <vector>
+
+#include "ctxfuse/core/block_tridiagonal.hpp"
+#include "ctxfuse/filters/ekf.hpp"
+#include "ctxfuse/filters/factors.hpp"
+#include "ctxfuse/models/kinematic.hpp"
+#include "ctxfuse/models/linear.hpp"
+
+namespace {
+using namespace ctxfuse;
+using PV3 = Layout<Block<"p", 3>, Block<"v", 3>>;
+using Range = models::RangeToPoint<PV3, 3>;
+using Cv = models::ConstantVelocity<PV3, 3>;
+constexpr int N = 6;
+
+/// A chain of n states with a prior on the first, a constant-velocity factor between
+/// neighbours and two ranges on every state, as stacked dense rows (A, r) and as the factors.
+struct Chain {
+  int n = 0;
+  std::vector<Vector<N>> x;
+  PriorFactor<N> prior;
+  std::vector<MotionFactor<Cv>> motion;                         // motion[i]: i -> i + 1
+  std::vector<std::vector<MeasurementFactor<N, Range>>> ranges;  // per state
+
+  explicit Chain(int states) : n(states) {
+    Cv cv;
+    cv.accel_psd = 0.5;
+    Gaussian<N> g;
+    g.mean << 0, 0, 1, 2, 0.5, 0;
+    g.cov.diagonal() << 4, 4, 1, 1, 1, 0.25;
+    EXPECT_TRUE(make_prior_factor(g, prior));
+    Vector<N> truth = g.mean;
+    const Vector<3> anchors[] = {{10, 0, 3}, {0, 10, 2}, {-8, -4, 4}};
+    for (int i = 0; i < n; ++i) {
+      if (i > 0) {
+        MotionFactor<Cv> m;
+        EXPECT_TRUE(make_motion_factor(cv, NoInput{}, 0.2, truth, m));
+        motion.push_back(m);
+        truth = cv.predict(truth, {}, 0.2, nullptr);
+      }
+      Vector<N> guess = truth;
+      guess.head<3>() += Vector<3>(0.3, -0.2, 0.1) * (1 + i % 2);
+      x.push_back(guess);
+      ranges.emplace_back();
+      for (int a = 0; a < 2; ++a) {
+        Range r;
+        r.anchor = anchors[(i + a) % 3];
+        r.sigma = 0.1;
+        MeasurementFactor<N, Range> f;
+        EXPECT_TRUE(make_measurement_factor<N>(r, Vector<1>((truth.head<3>() - r.anchor).norm() + 0.05), truth, f));
+        ranges.back().push_back(f);
+      }
+    }
+  }
+
+  template <int K>
+  void fill(BlockTridiagonal<N, K>& sys) const {
+    sys.reset(n);
+    EXPECT_TRUE(sys.add(prior, 0, x[0]));
+    for (int i = 0; i < n; ++i) {
+      for (const auto& f : ranges[static_cast<std::size_t>(i)]) EXPECT_TRUE(sys.add(f, i, x[static_cast<std::size_t>(i)]));
+      if (i > 0) {
+        const auto k = static_cast<std::size_t>(i);
+        EXPECT_TRUE(sys.add(motion[k - 1], i - 1, x[k - 1], x[k]));
+      }
+    }
+  }
+
+  /// Stacked whitened Jacobian and residual of every factor, written out plainly.
+  void dense(Eigen::MatrixXd& A, Eigen::VectorXd& r) const {
+    const int rows = N + 2 * n + N * (n - 1);
+    A = Eigen::MatrixXd::Zero(rows, N * n);
+    r = Eigen::VectorXd::Zero(rows);
+    int row = 0;
+    Matrix<N, N> Jp;
+    r.segment<N>(row) = prior.evaluate(x[0], &Jp);
+    A.block<N, N>(row, 0) = Jp;
+    row += N;
+    for (int i = 0; i < n; ++i) {
+      for (const auto& f : ranges[static_cast<std::size_t>(i)]) {
+        Matrix<1, N> J;
+        r(row) = f.evaluate(x[static_cast<std::size_t>(i)], &J)(0);
+        A.block<1, N>(row, N * i) = J;
+        ++row;
+      }
+      if (i > 0) {
+        SquareMatrix<N> Ja, Jb;
+        r.segment<N>(row) = motion[static_cast<std::size_t>(i - 1)].evaluate(x[static_cast<std::size_t>(i - 1)], x[static_cast<std::size_t>(i)], &Ja, &Jb);
+        A.block<N, N>(row, N * (i - 1)) = Ja;
+        A.block<N, N>(row, N * i) = Jb;
+        row += N;
+      }
+    }
+  }
+};
+
+/// H = A' A and g = A' r from the stacked rows, plainly.
+struct Dense {
+  Eigen::MatrixXd A, H;
+  Eigen::VectorXd r, g;
+  explicit Dense(const Chain& chain) {
+    chain.dense(A, r);
+    H = A.transpose() * A;
+    g = A.transpose() * r;
+  }
+};
+
+TEST(WindowAlgebra, NormalEquationsSolveAndLastCovarianceEqualDense) {
+  Chain chain(5);
+  BlockTridiagonal<N, 8> sys;
+  chain.fill(sys);
+  const Dense d(chain);
+  const Eigen::MatrixXd& H = d.H;
+  const Eigen::VectorXd& g = d.g;
+  for (int i = 0; i < chain.n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    EXPECT_LT((sys.diagonal[k] - H.block<N, N>(N * i, N * i)).cwiseAbs().maxCoeff(), 1e-9 * H.cwiseAbs().maxCoeff());
+    EXPECT_LT((sys.gradient[k] - g.segment<N>(N * i)).cwiseAbs().maxCoeff(), 1e-9 * g.cwiseAbs().maxCoeff());
+    if (i + 1 < chain.n) {
+      EXPECT_LT((sys.upper[k] - H.block<N, N>(N * i, N * (i + 1))).cwiseAbs().maxCoeff(), 1e-9 * H.cwiseAbs().maxCoeff());
+    }
+  }
+  EXPECT_NEAR(sys.cost, 0.5 * d.r.squaredNorm(), 1e-12 * d.r.squaredNorm());
+
+  BlockTridiagonalCholesky<N, 8> chol;
+  ASSERT_EQ(chol.factorize(sys), Problem::none);
+  std::array<Vector<N>, 8> b, dx;
+  for (int i = 0; i < chain.n; ++i) b[static_cast<std::size_t>(i)] = -sys.gradient[static_cast<std::size_t>(i)];
+  chol.solve(b, dx);
+  const Eigen::VectorXd dense_dx = H.ldlt().solve(-g);
+  for (int i = 0; i < chain.n; ++i)
+    EXPECT_LT((dx[static_cast<std::size_t>(i)] - dense_dx.segment<N>(N * i)).cwiseAbs().maxCoeff(), 1e-10);
+  const Eigen::MatrixXd cov = H.inverse();
+  const int last = N * (chain.n - 1);
+  EXPECT_LT((chol.last_covariance() - cov.block<N, N>(last, last)).cwiseAbs().maxCoeff(), 1e-12);
+
+  // Damped: each diagonal element scaled by (1 + lambda), as written out here.
+  Eigen::MatrixXd Hd = H;
+  for (int j = 0; j < Hd.rows(); ++j) Hd(j, j) += 0.3 * H(j, j);
+  ASSERT_EQ(chol.factorize(sys, 0.3), Problem::none);
+  chol.solve(b, dx);
+  const Eigen::VectorXd damped = Hd.ldlt().solve(-g);
+  for (int i = 0; i < chain.n; ++i)
+    EXPECT_LT((dx[static_cast<std::size_t>(i)] - damped.segment<N>(N * i)).cwiseAbs().maxCoeff(), 1e-10);
+}
+
+TEST(WindowAlgebra, MarginalisationEqualsDenseSchurComplement) {
+  Chain chain(2);
+  BlockTridiagonal<N, 2> sys;
+  chain.fill(sys);
+  const Dense d(chain);
+  const Eigen::MatrixXd H00 = d.H.topLeftCorner(N, N), H01 = d.H.topRightCorner(N, N), H11 = d.H.bottomRightCorner(N, N);
+  const Eigen::MatrixXd Lambda = H11 - H01.transpose() * H00.inverse() * H01;
+  const Eigen::VectorXd eta = d.g.tail(N) - H01.transpose() * H00.inverse() * d.g.head(N);
+  const Eigen::VectorXd mean = chain.x[1] - Lambda.inverse() * eta;
+
+  PriorFactor<N> prior;
+  ASSERT_TRUE(marginalize_first(sys, chain.x[1], prior));
+  EXPECT_LT((prior.W.transpose() * prior.W - Lambda).cwiseAbs().maxCoeff(), 1e-9 * Lambda.cwiseAbs().maxCoeff());
+  EXPECT_LT((prior.mean - mean).cwiseAbs().maxCoeff(), 1e-10);
+  // The dense joint solve gives x1's mean too: the quadratic model minimised over both states.
+  const Eigen::VectorXd joint = d.H.ldlt().solve(-d.g);
+  EXPECT_LT((prior.mean - (chain.x[1] + joint.tail(N))).cwiseAbs().maxCoeff(), 1e-10);
+}
+
+TEST(WindowAlgebra, IndefiniteBlocksGiveAStatusAndLeaveThePriorAlone) {
+  Chain chain(2);
+  BlockTridiagonal<N, 2> sys;
+  sys.reset(2);
+  // A range alone on state 0: rank one, H00 singular.
+  ASSERT_TRUE(sys.add(chain.ranges[0][0], 0, chain.x[0]));
+  ASSERT_TRUE(sys.add(chain.motion[0], 0, chain.x[0], chain.x[1]));
+  PriorFactor<N> prior;
+  prior.mean.setConstant(7.0);
+  const Status s = marginalize_first(sys, chain.x[1], prior);
+  EXPECT_EQ(s.outcome, Outcome::numerical_failure);
+  EXPECT_EQ(s.problem, Problem::system_not_positive_definite);
+  EXPECT_EQ(prior.mean, Vector<N>::Constant(7.0));
+  BlockTridiagonalCholesky<N, 2> chol;
+  EXPECT_EQ(chol.factorize(sys), Problem::system_not_positive_definite);
+  sys.diagonal[1](2, 2) = std::nan("");
+  EXPECT_EQ(chol.factorize(sys, 1.0), Problem::system_not_positive_definite);
+}
+
+TEST(WindowAlgebra, EkfUpdateEqualsOneGaussNewtonStep) {
+  Range range;
+  range.anchor = {12.0, -4.0, 3.0};
+  range.sigma = 0.2;
+  for (int trial = 0; trial < 3; ++trial) {
+    Gaussian<N> belief;
+    belief.mean << 1.0 + trial, 2.0, 0.5, 1.5, -0.5, 0.0;
+    SquareMatrix<N> B = SquareMatrix<N>::Random();
+    belief.cov = 0.1 * B * B.transpose() + 0.2 * SquareMatrix<N>::Identity();
+    const Vector<1> z(13.0 + trial);
+
+    PriorFactor<N> prior;
+    MeasurementFactor<N, Range> meas;
+    ASSERT_TRUE(make_prior_factor(belief, prior));
+    ASSERT_TRUE(make_measurement_factor<N>(range, z, belief.mean, meas));
+    BlockTridiagonal<N, 1> sys;
+    sys.reset(1);
+    ASSERT_TRUE(sys.add(prior, 0, belief.mean));
+    ASSERT_TRUE(sys.add(meas, 0, belief.mean));
+    BlockTridiagonalCholesky<N, 1> chol;
+    ASSERT_EQ(chol.factorize(sys), Problem::none);
+    std::array<Vector<N>, 1> b{-sys.gradient[0]}, dx;
+    chol.solve(b, dx);
+
+    ASSERT_TRUE(ekf::update<N>(range, belief, z));
+    EXPECT_LT(((belief.mean - prior.mean) - dx[0]).cwiseAbs().maxCoeff(), 1e-12) << trial;
+    EXPECT_LT((belief.cov - chol.last_covariance()).cwiseAbs().maxCoeff(), 1e-12) << trial;
+    EXPECT_GT(dx[0].norm(), 1e-2);  // the update moved the state: the equality is not 0 = 0
+  }
+}
+
+}  // namespace
