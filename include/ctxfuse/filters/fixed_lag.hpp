@@ -1,0 +1,284 @@
+// Fixed-lag smoother: the last K states of a vector-state motion model, with the factors
+// between them (motion between consecutive states, up to C measurements per state), solved
+// jointly by Levenberg-Marquardt at every step. Older states are marginalised into a
+// Gaussian prior on the oldest kept state, so the cost per step is bounded by K, not by the
+// length of the run.
+//
+// Why a smoother rather than the EKF: the ranges of a whole window relinearise together
+// (the EKF linearises each once, at its prior), and a state K-1 epochs back is estimated
+// from the measurements after it too. The newest state of a linear-Gaussian window equals
+// the Kalman filter's estimate, so the smoother never does worse than the EKF on the same
+// model; the price is K states per solve.
+//
+// API (the whole of it):
+//   FixedLagSmoother<Motion, Meas, K, C> s(motion, options);
+//   Status s.initialise(t0, Gaussian prior [, Measurements at t0]);
+//   Status s.step(t, u, measurements);     // u: the motion input over (t_prev, t]
+//   s.newest(), s.newest_covariance(), s.newest_belief(), s.time(), s.report(), s.window()
+// Measurements: fixed slots of (model, z, attached); a slot left unattached (an NLOS
+// decision made outside, as a mask) stays out of the graph. An epoch with none attached is
+// fine: the motion factor alone keeps the system positive definite.
+//
+// Every step either commits (accepted) or leaves the window exactly as it was and says why:
+// invalid input (non-finite or out-of-order time, dt <= 0, bad input, bad measurement or
+// noise), a non-positive-definite system, or no convergence in max_iterations. A step works
+// on the second of two window buffers and swaps on success, so nothing is half-applied.
+// Nothing is allocated on the heap after construction.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <limits>
+
+#include "ctxfuse/core/block_tridiagonal.hpp"
+#include "ctxfuse/core/factor.hpp"
+#include "ctxfuse/core/gaussian.hpp"
+#include "ctxfuse/filters/factors.hpp"
+
+namespace ctxfuse {
+
+struct FixedLagOptions {
+  int max_iterations = 20;
+  /// Converged when no element of the Gauss-Newton step exceeds this (state units: metres,
+  /// m/s). Far below any sensor's noise; the solution then agrees with Ceres' to 1e-6.
+  double step_tolerance = 1e-9;
+  /// Levenberg-Marquardt damping at the first iteration, divided by 10 after a step that
+  /// lowers the cost, multiplied by 10 after one that does not. 0: plain Gauss-Newton.
+  double initial_lambda = 1e-6;
+  FilterOptions limits{};
+};
+
+struct FixedLagReport {
+  int iterations = 0;
+  double initial_cost = std::numeric_limits<double>::quiet_NaN();  // 1/2 |r|^2 at the prediction
+  double final_cost = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// Up to C measurements of one epoch, each with its own model (an anchor and its sigma).
+template <class Meas, int C>
+struct EpochMeasurements {
+  static constexpr int capacity = C;
+  std::array<Meas, C> models{};
+  std::array<Vector<Meas::dim>, C> z{};
+  std::array<bool, C> attached{};
+  int count = 0;
+
+  /// False (nothing added) when all C slots are in use.
+  bool add(const Meas& model, const Vector<Meas::dim>& value, bool attach = true) {
+    if (count >= C) return false;
+    const auto k = static_cast<std::size_t>(count++);
+    models[k] = model;
+    z[k] = value;
+    attached[k] = attach;
+    return true;
+  }
+  int attached_count() const {
+    int n = 0;
+    for (int i = 0; i < count; ++i) n += attached[static_cast<std::size_t>(i)] ? 1 : 0;
+    return n;
+  }
+};
+
+template <VectorProcessModel Motion, class Meas, int K, int C>
+  requires MeasurementModel<Meas, Vector<Motion::dim>, Motion::dim>
+class FixedLagSmoother {
+ public:
+  static_assert(K >= 2, "a window keeps at least two states");
+  static constexpr int dim = Motion::dim;
+  static constexpr int lag = K;
+  using State = Vector<dim>;
+  using Input = typename Motion::Input;
+  using Measurements = EpochMeasurements<Meas, C>;
+
+  struct Epoch {
+    double time = 0.0;
+    State x = State::Zero();
+    MotionFactor<Motion> motion{};  // from the previous epoch; unused in the oldest slot
+    std::array<MeasurementFactor<dim, Meas>, C> factors{};
+    int factor_count = 0;           // attached measurements, compacted to the front
+  };
+  /// epochs[0] is the oldest kept state, carrying `prior` (the marginalised past).
+  struct Window {
+    std::array<Epoch, K> epochs{};
+    int size = 0;
+    PriorFactor<dim> prior{};
+    SquareMatrix<dim> newest_cov = SquareMatrix<dim>::Identity();
+  };
+
+  explicit FixedLagSmoother(Motion motion = {}, FixedLagOptions opts = {}) : motion_(motion), opts_(opts) {}
+
+  bool initialised() const { return current().size > 0; }
+  const Window& window() const { return current(); }
+  const State& newest() const { return current().epochs[last()].x; }
+  /// Marginal covariance of the newest state (the last Schur complement of the solve).
+  const SquareMatrix<dim>& newest_covariance() const { return current().newest_cov; }
+  Gaussian<dim> newest_belief() const { return Gaussian<dim>{newest(), newest_covariance()}; }
+  double time() const { return current().epochs[last()].time; }
+  const FixedLagReport& report() const { return report_; }
+  const Motion& motion() const { return motion_; }
+  const FixedLagOptions& options() const { return opts_; }
+
+  /// Starts (or restarts) the window with one state, its prior and optional measurements.
+  Status initialise(double t, const Gaussian<dim>& prior, const Measurements& meas = {}) {
+    if (!std::isfinite(t)) return Status::invalid(Problem::non_finite_dt);
+    Window& next = spare();
+    PriorFactor<dim> p;
+    if (Status s = make_prior_factor(prior, p); !s) return s;
+    Epoch& e = next.epochs[0];
+    e.time = t;
+    e.x = prior.mean;
+    if (Status s = attach(meas, e.x, e); !s) return s;
+    next.prior = p;
+    next.size = 1;
+    return solve_and_commit(next);
+  }
+
+  /// Adds the state at time t, predicted from the newest by the motion model with input u,
+  /// marginalising the oldest first when the window is full, and solves the window.
+  Status step(double t, const Input& u, const Measurements& meas) {
+    if (!initialised()) return Status::invalid(Problem::time_not_set);
+    if (!std::isfinite(t)) return Status::invalid(Problem::non_finite_dt);
+    const Window& now = current();
+    if (t < time()) return Status::invalid(Problem::out_of_order_time);
+    const State& x_prev = newest();
+    Epoch added;
+    if (Status s = make_motion_factor(motion_, u, t - time(), x_prev, added.motion, opts_.limits); !s) return s;
+    added.time = t;
+    added.x = motion_.predict(x_prev, u, t - time(), nullptr);
+    if (!all_finite(added.x)) return Status::failure(Problem::non_finite_prediction);
+    if (Status s = attach(meas, added.x, added); !s) return s;
+
+    Window& next = spare();
+    if (now.size == K) {
+      if (Status s = marginalize_oldest(now, next.prior); !s) return s;
+      for (int i = 1; i < K; ++i) next.epochs[static_cast<std::size_t>(i - 1)] = now.epochs[static_cast<std::size_t>(i)];
+      next.size = K - 1;
+    } else {
+      next = now;
+    }
+    next.epochs[static_cast<std::size_t>(next.size)] = added;
+    ++next.size;
+    return solve_and_commit(next);
+  }
+
+  /// 1/2 |r|^2 of the window's factors at states xs (+Inf when a residual is not finite):
+  /// what the solver minimises, exposed so that a test can compare minima with Ceres'.
+  double cost(const Window& w, const std::array<State, K>& xs) const {
+    double c = 0.5 * w.prior.evaluate(xs[0]).squaredNorm();
+    for (int i = 0; i < w.size; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      const Epoch& e = w.epochs[k];
+      for (int j = 0; j < e.factor_count; ++j)
+        c += 0.5 * e.factors[static_cast<std::size_t>(j)].evaluate(xs[k]).squaredNorm();
+      if (i > 0) c += 0.5 * e.motion.evaluate(xs[k - 1], xs[k]).squaredNorm();
+    }
+    return std::isfinite(c) ? c : std::numeric_limits<double>::infinity();
+  }
+
+ private:
+  const Window& current() const { return buffers_[static_cast<std::size_t>(active_)]; }
+  Window& spare() { return buffers_[static_cast<std::size_t>(1 - active_)]; }
+  std::size_t last() const { return static_cast<std::size_t>(current().size > 0 ? current().size - 1 : 0); }
+
+  /// Makes the factors of the attached slots (validated as an EKF update validates).
+  Status attach(const Measurements& meas, const State& x_lin, Epoch& e) const {
+    if (meas.count < 0 || meas.count > C) return Status::invalid(Problem::measurement_count_above_capacity);
+    e.factor_count = 0;
+    for (int i = 0; i < meas.count; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      if (!meas.attached[k]) continue;
+      auto& f = e.factors[static_cast<std::size_t>(e.factor_count)];
+      if (Status s = make_measurement_factor<dim>(meas.models[k], meas.z[k], x_lin, f, opts_.limits); !s) return s;
+      ++e.factor_count;
+    }
+    return Status{};
+  }
+
+  /// The factors on epochs[0] (prior, its measurements, the motion factor to epochs[1]) at the
+  /// current solution, Schur-complemented into a prior on epochs[1].
+  Status marginalize_oldest(const Window& w, PriorFactor<dim>& out) const {
+    BlockTridiagonal<dim, 2> sys;
+    sys.reset(2);
+    const Epoch& e0 = w.epochs[0];
+    const Epoch& e1 = w.epochs[1];
+    bool ok = sys.add(w.prior, 0, e0.x);
+    for (int j = 0; j < e0.factor_count; ++j) ok = ok && sys.add(e0.factors[static_cast<std::size_t>(j)], 0, e0.x);
+    ok = ok && sys.add(e1.motion, 0, e0.x, e1.x);
+    if (!ok) return Status::failure(Problem::non_finite_prediction);
+    return marginalize_first(sys, e1.x, out);
+  }
+
+  bool linearize(const Window& w, const std::array<State, K>& xs) {
+    sys_.reset(w.size);
+    bool ok = sys_.add(w.prior, 0, xs[0]);
+    for (int i = 0; i < w.size && ok; ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      const Epoch& e = w.epochs[k];
+      for (int j = 0; j < e.factor_count && ok; ++j) ok = sys_.add(e.factors[static_cast<std::size_t>(j)], i, xs[k]);
+      if (i > 0 && ok) ok = sys_.add(e.motion, i - 1, xs[k - 1], xs[k]);
+    }
+    return ok;
+  }
+
+  /// Levenberg-Marquardt on the block-tridiagonal normal equations from the states in `w`.
+  Status solve_and_commit(Window& w) {
+    FixedLagReport rep;
+    std::array<State, K> xs, trial;
+    std::array<Vector<dim>, K> rhs, dx;
+    for (int i = 0; i < w.size; ++i) xs[static_cast<std::size_t>(i)] = w.epochs[static_cast<std::size_t>(i)].x;
+    if (!linearize(w, xs)) return Status::failure(Problem::non_finite_prediction);
+    rep.initial_cost = sys_.cost;
+    double lambda = opts_.initial_lambda;
+    bool converged = false;
+    while (rep.iterations < opts_.max_iterations && !converged) {
+      ++rep.iterations;
+      if (chol_.factorize(sys_, lambda) != Problem::none) {
+        if (lambda > 0.0 && lambda < 1e12) {
+          lambda *= 10.0;
+          continue;
+        }
+        return Status::failure(Problem::system_not_positive_definite);
+      }
+      for (int i = 0; i < w.size; ++i) rhs[static_cast<std::size_t>(i)] = -sys_.gradient[static_cast<std::size_t>(i)];
+      chol_.solve(rhs, dx);
+      double largest = 0.0;
+      for (int i = 0; i < w.size; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        trial[k] = xs[k] + dx[k];
+        largest = std::max(largest, dx[k].cwiseAbs().maxCoeff());
+      }
+      if (!std::isfinite(largest)) return Status::failure(Problem::non_finite_state);
+      converged = largest <= opts_.step_tolerance;
+      // Gauss-Newton takes every step; LM only those that do not raise the cost. At the
+      // minimum a step below the tolerance may raise it by rounding: it ends the solve.
+      if (lambda == 0.0 || cost(w, trial) <= sys_.cost) {
+        xs = trial;
+        if (!linearize(w, xs)) return Status::failure(Problem::non_finite_prediction);
+        lambda *= 0.1;
+      } else if (!converged) {
+        lambda *= 10.0;
+      }
+    }
+    rep.final_cost = sys_.cost;
+    report_ = rep;
+    if (!converged) return Status::failure(Problem::not_converged);
+    // Undamped at the solution: the last Schur complement is the newest state's information.
+    if (chol_.factorize(sys_, 0.0) != Problem::none) return Status::failure(Problem::system_not_positive_definite);
+    const SquareMatrix<dim> P = chol_.last_covariance();
+    if (!all_finite(P)) return Status::failure(Problem::non_finite_covariance);
+    for (int i = 0; i < w.size; ++i) w.epochs[static_cast<std::size_t>(i)].x = xs[static_cast<std::size_t>(i)];
+    w.newest_cov = P;
+    active_ = 1 - active_;
+    return Status{};
+  }
+
+  Motion motion_;
+  FixedLagOptions opts_;
+  std::array<Window, 2> buffers_{};
+  int active_ = 0;
+  FixedLagReport report_{};
+  BlockTridiagonal<dim, K> sys_{};
+  BlockTridiagonalCholesky<dim, K> chol_{};
+};
+
+}  // namespace ctxfuse
