@@ -17,7 +17,8 @@
 namespace ctxfuse::pipelines::region_imm {
 
 /// GNSS alone: the last fix; without a fix at an epoch the receiver's last position is all
-/// the user has.
+/// the user has. A fix whose position is not finite is no fix: the epoch has no solution and
+/// the last position is held (before, a NaN fix became the position reported from then on).
 struct GnssOnly {
   Track track{};
   Eigen::Vector2d last = Eigen::Vector2d::Zero();
@@ -27,6 +28,7 @@ struct GnssOnly {
   void speed(const io::SpeedSample&) {}
   void uwb(const io::UwbRange&) {}
   void gnss(const io::GnssFix& e) {
+    if (!e.position.head<2>().allFinite()) return;
     last = e.position.head<2>();
     last_fix_t = e.t;
   }
