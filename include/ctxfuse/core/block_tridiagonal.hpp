@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include "ctxfuse/core/factor.hpp"
 #include "ctxfuse/core/numerics.hpp"
@@ -48,8 +49,8 @@ struct BlockTridiagonal {
     const Vector<F::dim> r = f.evaluate(x, &J);
     if (!all_finite(r) || !all_finite(J)) return false;
     const auto k = static_cast<std::size_t>(i);
-    diagonal[k].noalias() += J.transpose() * J;
-    gradient[k].noalias() += J.transpose() * r;
+    diagonal[k].noalias() += J.transpose().lazyProduct(J);
+    gradient[k].noalias() += J.transpose().lazyProduct(r);
     cost += 0.5 * r.squaredNorm();
     return true;
   }
@@ -61,24 +62,67 @@ struct BlockTridiagonal {
     const Vector<F::dim> r = f.evaluate(xi, xj, &Ji, &Jj);
     if (!all_finite(r) || !all_finite(Ji) || !all_finite(Jj)) return false;
     const auto k = static_cast<std::size_t>(i);
-    diagonal[k].noalias() += Ji.transpose() * Ji;
-    diagonal[k + 1].noalias() += Jj.transpose() * Jj;
-    upper[k].noalias() += Ji.transpose() * Jj;
-    gradient[k].noalias() += Ji.transpose() * r;
-    gradient[k + 1].noalias() += Jj.transpose() * r;
+    diagonal[k].noalias() += Ji.transpose().lazyProduct(Ji);
+    diagonal[k + 1].noalias() += Jj.transpose().lazyProduct(Jj);
+    upper[k].noalias() += Ji.transpose().lazyProduct(Jj);
+    gradient[k].noalias() += Ji.transpose().lazyProduct(r);
+    gradient[k + 1].noalias() += Jj.transpose().lazyProduct(r);
     cost += 0.5 * r.squaredNorm();
     return true;
   }
 };
 
-/// Block Cholesky of a BlockTridiagonal, optionally damped (Levenberg-Marquardt): each
-/// diagonal block gets lambda * max(diag, 1e-6) added on its diagonal, Ceres' scaling, so
-/// the damping does not depend on the units of the state.
+/// Inverse of a small symmetric positive definite matrix from its LDL' factorisation (unit
+/// lower L, D > 0): S^-1 = L^-T D^-1 L^-1, reading S's lower triangle. No square roots, and
+/// every loop bound a compile-time constant (static_for over the columns), so the compiler
+/// emits straight-line code: the smoother inverts one block per state per iteration, and
+/// with cholesky_lower's run-time loops and square roots that took a fifth of a step.
+/// False when a pivot is not positive and finite (S not positive definite, or NaN/Inf).
+template <int N>
+bool spd_inverse(const SquareMatrix<N>& S, SquareMatrix<N>& S_inv) {
+  SquareMatrix<N> L = SquareMatrix<N>::Identity();
+  Vector<N> d, inv_d;
+  bool ok = true;
+  detail::static_for<N>([&](auto jc) {
+    constexpr int j = static_cast<int>(decltype(jc)::value);
+    double dj = S(j, j);
+    for (int k = 0; k < j; ++k) dj -= L(j, k) * L(j, k) * d(k);
+    // NaN fails the comparison; +Inf fails the finiteness test.
+    ok = ok && dj > 0.0 && dj < std::numeric_limits<double>::infinity();
+    d(j) = dj;
+    inv_d(j) = 1.0 / dj;
+    for (int i = j + 1; i < N; ++i) {
+      double acc = S(i, j);
+      for (int k = 0; k < j; ++k) acc -= L(i, k) * L(j, k) * d(k);
+      L(i, j) = acc * inv_d(j);
+    }
+  });
+  if (!ok) return false;
+  SquareMatrix<N> Li = SquareMatrix<N>::Identity();  // L^-1, unit lower triangular
+  detail::static_for<N>([&](auto jc) {
+    constexpr int j = static_cast<int>(decltype(jc)::value);
+    for (int i = j + 1; i < N; ++i) {
+      double acc = L(i, j);
+      for (int k = j + 1; k < i; ++k) acc += L(i, k) * Li(k, j);
+      Li(i, j) = -acc;
+    }
+  });
+  const SquareMatrix<N> DLi = inv_d.asDiagonal() * Li;
+  S_inv.noalias() = Li.transpose().lazyProduct(DLi);
+  symmetrize(S_inv);
+  return all_finite(S_inv);
+}
+
+/// Block Cholesky (block Thomas) of a BlockTridiagonal, optionally damped (Levenberg-
+/// Marquardt): each diagonal block gets lambda * max(diag, 1e-6) added on its diagonal,
+/// Ceres' scaling, so the damping does not depend on the units of the state.
 ///   S_0 = D_0,  S_i = D_i - U_{i-1}' S_{i-1}^-1 U_{i-1},  G_i = S_i^-1 U_i
+/// The S_i^-1 are kept explicitly: N is small, and every later use is then a fixed-size
+/// matrix product instead of a triangular solve; the last one is the marginal covariance.
 template <int N, int K>
 struct BlockTridiagonalCholesky {
   int size = 0;
-  std::array<SquareMatrix<N>, K> L{};  // S_i = L_i L_i'
+  std::array<SquareMatrix<N>, K> S_inv{};
   std::array<SquareMatrix<N>, K> G{};
 
   /// Problem::system_not_positive_definite when a Schur complement is not (rank deficiency,
@@ -90,12 +134,9 @@ struct BlockTridiagonalCholesky {
       SquareMatrix<N> S = sys.diagonal[k];
       if (lambda > 0.0)
         for (int j = 0; j < N; ++j) S(j, j) += lambda * std::max(sys.diagonal[k](j, j), 1e-6);
-      if (i > 0) S.noalias() -= sys.upper[k - 1].transpose() * G[k - 1];
-      if (!cholesky_lower<N>(S, L[k])) return Problem::system_not_positive_definite;
-      if (i + 1 < size) {
-        G[k] = sys.upper[k];
-        solve_block(k, G[k]);
-      }
+      if (i > 0) S.noalias() -= sys.upper[k - 1].transpose().lazyProduct(G[k - 1]);
+      if (!spd_inverse<N>(S, S_inv[k])) return Problem::system_not_positive_definite;
+      if (i + 1 < size) G[k].noalias() = S_inv[k].lazyProduct(sys.upper[k]);
     }
     return Problem::none;
   }
@@ -103,36 +144,29 @@ struct BlockTridiagonalCholesky {
   /// x = H^-1 b (H the factorised matrix).
   void solve(const std::array<Vector<N>, K>& b, std::array<Vector<N>, K>& x) const {
     // Forward: c_i = b_i - U_{i-1}' S_{i-1}^-1 c_{i-1} = b_i - G_{i-1}' c_{i-1} (S symmetric),
-    // e_i = S_i^-1 c_i, held in x.
-    std::array<Vector<N>, K> c{};
+    // e_i = S_i^-1 c_i, held in x. Backward: x_i = e_i - G_i x_{i+1}.
+    Vector<N> c = b[0];
     for (int i = 0; i < size; ++i) {
       const auto k = static_cast<std::size_t>(i);
-      c[k] = b[k];
-      if (i > 0) c[k].noalias() -= G[k - 1].transpose() * c[k - 1];
-      x[k] = c[k];
-      solve_block(k, x[k]);
+      if constexpr (K > 1) {  // (K = 1: g++ cannot see that the index stays in bounds)
+        if (i > 0) {
+          Vector<N> next = b[k];
+          next.noalias() -= G[k - 1].transpose().lazyProduct(c);
+          c = next;
+        }
+      }
+      x[k].noalias() = S_inv[k].lazyProduct(c);
     }
-    // Backward: x_i = e_i - G_i x_{i+1}.
-    for (int i = size - 2; i >= 0; --i) {
-      const auto k = static_cast<std::size_t>(i);
-      x[k].noalias() -= G[k] * x[k + 1];
+    if constexpr (K > 1) {
+      for (int i = size - 2; i >= 0; --i) {
+        const auto k = static_cast<std::size_t>(i);
+        x[k].noalias() -= G[k].lazyProduct(x[k + 1]);
+      }
     }
   }
 
   /// S_{n-1}^-1: the marginal covariance of the last state under the factorised information.
-  SquareMatrix<N> last_covariance() const {
-    SquareMatrix<N> P = SquareMatrix<N>::Identity();
-    solve_block(static_cast<std::size_t>(size - 1), P);
-    symmetrize(P);
-    return P;
-  }
-
- private:
-  template <class Derived>
-  void solve_block(std::size_t k, Eigen::MatrixBase<Derived>& B) const {
-    L[k].template triangularView<Eigen::Lower>().solveInPlace(B);
-    L[k].template triangularView<Eigen::Lower>().transpose().solveInPlace(B);
-  }
+  const SquareMatrix<N>& last_covariance() const { return S_inv[static_cast<std::size_t>(size - 1)]; }
 };
 
 /// Marginalises state 0 of a two-state system made of ONLY the factors that touch state 0
@@ -144,25 +178,20 @@ struct BlockTridiagonalCholesky {
 template <int N>
 Status marginalize_first(const BlockTridiagonal<N, 2>& sys, const Vector<N>& x1, PriorFactor<N>& out) {
   if (sys.size != 2) return Status::invalid(Problem::too_few_measurements);
-  SquareMatrix<N> L0;
-  if (!cholesky_lower<N>(sys.diagonal[0], L0)) return Status::failure(Problem::system_not_positive_definite);
-  // A = L0^-1 H01, a = L0^-1 g0: H10 H00^-1 H01 = A' A, H10 H00^-1 g0 = A' a.
-  SquareMatrix<N> A = sys.upper[0];
-  Vector<N> a = sys.gradient[0];
-  L0.template triangularView<Eigen::Lower>().solveInPlace(A);
-  L0.template triangularView<Eigen::Lower>().solveInPlace(a);
+  SquareMatrix<N> H00_inv;
+  if (!spd_inverse<N>(sys.diagonal[0], H00_inv)) return Status::failure(Problem::system_not_positive_definite);
+  // T = H00^-1 H01: H10 H00^-1 H01 = H01' T, H10 H00^-1 g0 = T' g0.
+  const SquareMatrix<N> T = H00_inv.lazyProduct(sys.upper[0]);
   SquareMatrix<N> Lambda = sys.diagonal[1];
-  Lambda.noalias() -= A.transpose() * A;
+  Lambda.noalias() -= sys.upper[0].transpose().lazyProduct(T);
   symmetrize(Lambda);
   Vector<N> eta = sys.gradient[1];
-  eta.noalias() -= A.transpose() * a;
+  eta.noalias() -= T.transpose() * sys.gradient[0];
   PriorFactor<N> prior;
-  SquareMatrix<N> L1;
-  if (!all_finite(Lambda) || !cholesky_lower<N>(Lambda, L1))
+  SquareMatrix<N> L1, Lambda_inv;
+  if (!all_finite(Lambda) || !cholesky_lower<N>(Lambda, L1) || !spd_inverse<N>(Lambda, Lambda_inv))
     return Status::failure(Problem::system_not_positive_definite);
-  Vector<N> step = eta;
-  L1.template triangularView<Eigen::Lower>().solveInPlace(step);
-  L1.template triangularView<Eigen::Lower>().transpose().solveInPlace(step);
+  const Vector<N> step = Lambda_inv * eta;
   prior.mean = x1 - step;
   prior.W = L1.transpose();
   if (!all_finite(prior.mean) || !all_finite(prior.W)) return Status::failure(Problem::system_not_positive_definite);

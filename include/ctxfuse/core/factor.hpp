@@ -50,6 +50,22 @@ concept BinaryFactor = Factor<F> && (F::slot_dims.size() == 2) &&
                          { f.evaluate(a, b, Ja, Jb) } -> std::convertible_to<Vector<F::dim>>;
                        };
 
+/// L^-1 of a lower-triangular L with a non-zero diagonal, by forward substitution on the
+/// identity, as straight-line fixed-size code: Eigen's triangular solve with a matrix
+/// right-hand side runs its blocked dynamic-size kernel (packing included) even for a 4 x 4.
+template <int M>
+void lower_triangular_inverse(const SquareMatrix<M>& L, SquareMatrix<M>& Li) {
+  Li.setZero();
+  for (int j = 0; j < M; ++j) {
+    Li(j, j) = 1.0 / L(j, j);
+    for (int i = j + 1; i < M; ++i) {
+      double acc = 0.0;
+      for (int k = j; k < i; ++k) acc += L(i, k) * Li(k, j);
+      Li(i, j) = -acc / L(i, i);
+    }
+  }
+}
+
 /// W with W' W = C^-1 for a covariance C = L L' (W = L^-1, lower triangular), so that
 /// |W r|^2 = r' C^-1 r. Problem::none, or why C cannot whiten (not finite, not positive definite).
 template <int M>
@@ -57,9 +73,7 @@ Problem whitening_from_covariance(const SquareMatrix<M>& C, SquareMatrix<M>& W) 
   if (!all_finite(C)) return Problem::non_finite_covariance;
   SquareMatrix<M> L;
   if (!cholesky_lower<M>(C, L)) return Problem::covariance_not_positive_definite;
-  W.setIdentity();
-  L.template triangularView<Eigen::Lower>().solveInPlace(W);
-  W.template triangularView<Eigen::StrictlyUpper>().setZero();
+  lower_triangular_inverse<M>(L, W);
   return all_finite(W) ? Problem::none : Problem::covariance_not_positive_definite;
 }
 

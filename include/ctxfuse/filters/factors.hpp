@@ -66,6 +66,12 @@ struct MotionFactor {
                        SquareMatrix<dim>* J1 = nullptr) const {
     SquareMatrix<dim> F, D_pred, D_next;
     const Vector<dim> pred = model.predict(x0, input, dt, J0 ? &F : nullptr);
+    if constexpr (!requires { model.difference(x1, pred, &D_next, &D_pred); }) {
+      // Plain subtraction: d/dx1 = I, d/dpred = -I; skip the products with identities.
+      if (J0) J0->noalias() = -W.lazyProduct(F);
+      if (J1) *J1 = W;
+      return W * (x1 - pred);
+    }
     const bool need = J0 || J1;
     const Vector<dim> d = difference(model, x1, pred, need ? &D_next : nullptr, need ? &D_pred : nullptr);
     if (J0) J0->noalias() = W * (D_pred * F);
