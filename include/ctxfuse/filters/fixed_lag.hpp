@@ -265,6 +265,13 @@ class FixedLagSmoother {
       }
       if (!std::isfinite(largest)) return Status::failure(Problem::non_finite_state);
       converged = largest <= opts_.step_tolerance;
+      if (converged && undamped) {
+        // A step this small from an undamped system: take it without linearising there. The
+        // cost can change only by rounding, and the covariance below comes from this
+        // factorisation (its point within step_tolerance of the solution).
+        xs = trial;
+        break;
+      }
       auto& next = sys_[static_cast<std::size_t>(1 - at)];
       const bool finite = linearize(w, trial, next);
       // LM takes only steps that do not raise the cost. At the minimum a step below the
@@ -279,7 +286,7 @@ class FixedLagSmoother {
         lambda = std::max(10.0 * lambda, opts_.min_lambda);
       }
     }
-    rep.final_cost = sys_[static_cast<std::size_t>(at)].cost;
+    rep.final_cost = sys_[static_cast<std::size_t>(at)].cost;  // at the last linearisation point
     report_ = rep;
     if (!converged) return Status::failure(Problem::not_converged);
     // The newest state's information is the last Schur complement of an undamped
