@@ -2,15 +2,14 @@
 // between them (motion between consecutive states, up to C measurements per state), solved
 // jointly at every step by Gauss-Newton on the block-tridiagonal normal equations
 // (core/block_tridiagonal.hpp), falling back to Levenberg-Marquardt damping when a step
-// raises the cost. Older states are marginalised into a
-// Gaussian prior on the oldest kept state, so the cost per step is bounded by K, not by the
-// length of the run.
+// raises the cost. Older states are marginalised into a Gaussian prior on the oldest kept
+// state, so the cost per step is bounded by K, not by the length of the run.
 //
 // Why a smoother rather than the EKF: the ranges of a whole window relinearise together
 // (the EKF linearises each once, at its prior), and a state K-1 epochs back is estimated
-// from the measurements after it too. The newest state of a linear-Gaussian window equals
-// the Kalman filter's estimate, so the smoother never does worse than the EKF on the same
-// model; the price is K states per solve.
+// from the measurements after it too. With linear models the newest state equals the Kalman
+// filter's estimate exactly; with ranges it matches it closely and the lagged states are
+// better (tests/factors/fixed_lag_test.cpp measures both). The price is K states per solve.
 //
 // API (the whole of it):
 //   FixedLagSmoother<Motion, Meas, K, C> s(motion, options);
@@ -25,7 +24,9 @@
 // invalid input (non-finite or out-of-order time, dt <= 0, bad input, bad measurement or
 // noise), a non-positive-definite system, or no convergence in max_iterations. A step works
 // on the second of two window buffers and swaps on success, so nothing is half-applied.
-// Nothing is allocated on the heap after construction.
+// Nothing is allocated on the heap after construction; the object holds both windows and two
+// normal-equation systems by value (sizeof grows as K (C + dim^2)), so keep it as a member
+// or on the heap rather than on a small stack.
 #pragma once
 
 #include <array>
