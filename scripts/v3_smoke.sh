@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# The x86-64-v3 (AVX2, FMA) release build, smoke-tested: builds the core, filter and IMM test
-# binaries, the IMM benchmark quoted by docs/benchmarks.md and the IMM step driver in
-# build/release-v3; runs every test of those binaries; runs the benchmark briefly; and requires
+# The x86-64-v3 (AVX2, FMA) release build, smoke-tested. Builds in build/release-v3 the core,
+# filter and IMM test binaries, the IMM benchmark quoted by docs/benchmarks.md and the IMM step
+# driver; runs every test of those binaries and the benchmark briefly; and requires
 # bench_imm_steps to agree with the default build's (build/release) to a relative 1e-9 (fused
 # multiply-adds round differently; the -march=native fault of g++ 12.2 would show as far more).
+# The whole demo on v3: build its tool and run scripts/compare_compilers.sh --v3.
 #   scripts/v3_smoke.sh     (needs build/release: scripts/test.sh release)
 set -uo pipefail
 
