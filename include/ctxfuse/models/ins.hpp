@@ -53,6 +53,24 @@ struct GaussMarkov {
   }
 };
 
+/// Discrete process noise of a strapdown INS over any error layout with blocks p, v, theta, bg
+/// and ba. White specific-force noise enters v directly and p through the half-step; isotropic
+/// noise is unchanged by the rotation to the navigation frame.
+template <class L>
+SquareMatrix<L::size> strapdown_noise(double accel_noise_density, double gyro_noise_density, const GaussMarkov& gyro_bias,
+                                      const GaussMarkov& accel_bias, double dt) {
+  SquareMatrix<L::size> Q = SquareMatrix<L::size>::Zero();
+  const double qa = accel_noise_density * accel_noise_density;
+  L::template cov<"p">(Q).diagonal().setConstant(qa * dt * dt * dt / 3.0);
+  L::template cov<"p", "v">(Q).diagonal().setConstant(qa * dt * dt / 2.0);
+  L::template cov<"v", "p">(Q).diagonal().setConstant(qa * dt * dt / 2.0);
+  L::template cov<"v">(Q).diagonal().setConstant(qa * dt);
+  L::template cov<"theta">(Q).diagonal().setConstant(gyro_noise_density * gyro_noise_density * dt);
+  L::template cov<"bg">(Q).diagonal().setConstant(gyro_bias.variance(dt));
+  L::template cov<"ba">(Q).diagonal().setConstant(accel_bias.variance(dt));
+  return Q;
+}
+
 struct Ins15Model {
   using ErrorLayout = Ins15Layout;
   using State = InsState;
@@ -124,19 +142,7 @@ struct Ins15Model {
   }
 
   SquareMatrix<dim> noise(const State&, const Input&, double dt) const {
-    using L = ErrorLayout;
-    SquareMatrix<dim> Q = SquareMatrix<dim>::Zero();
-    // White specific-force noise enters v directly and p through the half-step; isotropic
-    // noise is unchanged by the rotation to the navigation frame.
-    const double qa = accel_noise_density * accel_noise_density;
-    L::cov<"p">(Q).diagonal().setConstant(qa * dt * dt * dt / 3.0);
-    L::cov<"p", "v">(Q).diagonal().setConstant(qa * dt * dt / 2.0);
-    L::cov<"v", "p">(Q).diagonal().setConstant(qa * dt * dt / 2.0);
-    L::cov<"v">(Q).diagonal().setConstant(qa * dt);
-    L::cov<"theta">(Q).diagonal().setConstant(gyro_noise_density * gyro_noise_density * dt);
-    L::cov<"bg">(Q).diagonal().setConstant(gyro_bias.variance(dt));
-    L::cov<"ba">(Q).diagonal().setConstant(accel_bias.variance(dt));
-    return Q;
+    return strapdown_noise<ErrorLayout>(accel_noise_density, gyro_noise_density, gyro_bias, accel_bias, dt);
   }
 
   State inject(const State& x, const Vector<dim>& dx) const {

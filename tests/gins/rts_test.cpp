@@ -1,0 +1,170 @@
+// RTS smoother over the error-state filter's step records: on a linear model with time-varying
+// F (irregular time steps) and measurement gaps it equals the batch least-squares solution of
+// the whole run, means and covariances; the smoothed covariance is never above the filtered one.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+
+#include <iostream>
+#include <vector>
+
+#include "ctxfuse/filters/eskf.hpp"
+#include "ctxfuse/filters/rts.hpp"
+#include "ctxfuse/sim/random.hpp"
+
+namespace {
+using namespace ctxfuse;
+
+/// Constant velocity on a line, white-acceleration noise: F and Q change with every dt.
+struct ConstantVelocity {
+  using State = Vector<2>;
+  using Input = NoInput;
+  static constexpr int dim = 2;
+  double accel_density = 0.3;
+  static SquareMatrix<2> transition(double dt) {
+    SquareMatrix<2> F;
+    F << 1.0, dt, 0.0, 1.0;
+    return F;
+  }
+  State predict(const State& x, const Input&, double dt, SquareMatrix<2>* F) const {
+    if (F) *F = transition(dt);
+    return transition(dt) * x;
+  }
+  SquareMatrix<2> noise(const State&, const Input&, double dt) const {
+    const double q = accel_density * accel_density;
+    SquareMatrix<2> Q;
+    Q << q * dt * dt * dt / 3.0, q * dt * dt / 2.0, q * dt * dt / 2.0, q * dt;
+    return Q;
+  }
+  State inject(const State& x, const Vector<2>& dx) const { return x + dx; }
+  Vector<2> difference(const State& a, const State& b) const { return a - b; }
+};
+
+struct Position {
+  static constexpr int dim = 1;
+  double sigma = 0.5;
+  Vector<1> predict(const Vector<2>& x, Matrix<1, 2>* H) const {
+    if (H) *H << 1.0, 0.0;
+    return Vector<1>(x(0));
+  }
+  SquareMatrix<1> noise(const Vector<2>&) const { return SquareMatrix<1>(sigma * sigma); }
+};
+
+struct ForwardRun {
+  std::vector<double> dt;            // dt[k] from epoch k-1 to k (dt[0] unused)
+  std::vector<bool> measured;
+  std::vector<double> z;
+  RtsRecorder<ConstantVelocity> rec;
+  std::vector<eskf::Belief<ConstantVelocity>> filtered;
+};
+
+ForwardRun forward(int epochs) {
+  ForwardRun r;
+  const ConstantVelocity m;
+  const Position h;
+  sim::Rng rng(5);
+  eskf::Belief<ConstantVelocity> b;
+  b.nominal << 1.0, 0.5;
+  b.cov << 4.0, 0.5, 0.5, 1.0;
+  r.rec.reserve(static_cast<std::size_t>(epochs));
+  r.rec.start(0.0, b);
+  r.filtered.push_back(b);
+  r.dt.push_back(0.0);
+  r.measured.push_back(false);
+  r.z.push_back(0.0);
+  double t = 0.0;
+  for (int k = 1; k < epochs; ++k) {
+    const double dt = 0.05 + 0.4 * rng.uniform();  // irregular: F_k differs at every step
+    t += dt;
+    // Two predictions per epoch (split interval): the recorder composes their transitions.
+    SquareMatrix<2> F;
+    EXPECT_TRUE(eskf::predict(m, b, {}, 0.3 * dt, {}, &F).accepted());
+    r.rec.predicted(F);
+    EXPECT_TRUE(eskf::predict(m, b, {}, 0.7 * dt, {}, &F).accepted());
+    r.rec.predicted(F);
+    const auto prior = b;
+    // Measurements with gaps: none in epochs 10-24, otherwise two of three epochs.
+    const bool measure = (k < 10 || k >= 25) && k % 3 != 0;
+    const double z = 1.0 + 0.5 * t + 0.3 * std::sin(t) + 0.5 * rng.normal();
+    if (measure) EXPECT_TRUE(eskf::update(m, h, b, Vector<1>(z)).accepted());
+    EXPECT_TRUE(r.rec.record(t, prior, b).accepted());
+    r.filtered.push_back(b);
+    r.dt.push_back(dt);
+    r.measured.push_back(measure);
+    r.z.push_back(z);
+  }
+  return r;
+}
+
+TEST(Rts, EqualsBatchLeastSquaresOnALinearModelWithTimeVaryingTransition) {
+  const int K = 60;
+  ForwardRun r = forward(K);
+  const ConstantVelocity m;
+  ASSERT_TRUE(r.rec.smooth(m).accepted());
+
+  // Batch: minimise the prior, process and measurement terms over all 2K unknowns at once.
+  const int n = 2 * K;
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n);
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(n);
+  const Eigen::Matrix2d P0inv = r.filtered[0].cov.inverse();
+  A.block<2, 2>(0, 0) += P0inv;
+  g.segment<2>(0) += P0inv * r.filtered[0].nominal;
+  for (int k = 1; k < K; ++k) {
+    // The two sub-steps compose to one constant-velocity step over dt with the summed noise
+    // F2 Q1 F2' + Q2 -- written out here from the model, independently of the recorder.
+    const double d1 = 0.3 * r.dt[static_cast<std::size_t>(k)], d2 = 0.7 * r.dt[static_cast<std::size_t>(k)];
+    const Eigen::Matrix2d F2 = ConstantVelocity::transition(d2);
+    const Eigen::Matrix2d F = F2 * ConstantVelocity::transition(d1);
+    const Eigen::Matrix2d Q = F2 * m.noise({}, {}, d1) * F2.transpose() + m.noise({}, {}, d2);
+    Eigen::Matrix<double, 2, 4> J;
+    J << -F, Eigen::Matrix2d::Identity();
+    const Eigen::Matrix2d W = Q.inverse();
+    A.block<4, 4>(2 * (k - 1), 2 * (k - 1)) += J.transpose() * W * J;
+    if (r.measured[static_cast<std::size_t>(k)]) {
+      A(2 * k, 2 * k) += 1.0 / 0.25;
+      g(2 * k) += r.z[static_cast<std::size_t>(k)] / 0.25;
+    }
+  }
+  const Eigen::MatrixXd Ainv = A.inverse();
+  const Eigen::VectorXd x = Ainv * g;
+  double worst_mean = 0.0, worst_cov = 0.0;
+  for (int k = 0; k < K; ++k) {
+    const auto& s = r.rec.records()[static_cast<std::size_t>(k)].posterior;
+    worst_mean = std::max(worst_mean, (s.nominal - x.segment<2>(2 * k)).cwiseAbs().maxCoeff());
+    worst_cov = std::max(worst_cov, (s.cov - Ainv.block<2, 2>(2 * k, 2 * k)).cwiseAbs().maxCoeff());
+  }
+  EXPECT_LT(worst_mean, 1e-9);
+  EXPECT_LT(worst_cov, 1e-9);
+  // Smoothing changed something: in the gap the filtered and smoothed estimates differ.
+  EXPECT_GT((r.rec.records()[20].posterior.nominal - r.filtered[20].nominal).norm(), 1e-3);
+}
+
+TEST(Rts, SmoothedCovarianceIsNeverAboveTheFiltered) {
+  ForwardRun r = forward(80);
+  ASSERT_TRUE(r.rec.smooth(ConstantVelocity{}).accepted());
+  for (std::size_t k = 0; k + 1 < r.filtered.size(); ++k) {
+    const Eigen::Matrix2d d = r.filtered[k].cov - r.rec.records()[k].posterior.cov;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(d);
+    EXPECT_GE(es.eigenvalues().minCoeff(), -1e-12) << "epoch " << k;
+    EXPECT_GT(d.trace(), 0.0) << "epoch " << k;  // every epoch but the last gains from later data
+  }
+  // The last epoch is the filter's own.
+  EXPECT_EQ(r.filtered.back().cov, r.rec.records().back().posterior.cov);
+  // Memory: one record per epoch, reported.
+  EXPECT_EQ(r.rec.memory_bytes(), r.rec.records().capacity() * sizeof(RtsRecorder<ConstantVelocity>::Record));
+  std::cout << "RTS records: " << r.rec.records().size() << " epochs, " << r.rec.memory_bytes() << " bytes\n";
+}
+
+TEST(Rts, RefusesAnEpochThatDoesNotAdvanceAndKeepsTheRecords) {
+  RtsRecorder<ConstantVelocity> rec;
+  eskf::Belief<ConstantVelocity> b;
+  EXPECT_EQ(rec.record(1.0, b, b).problem, Problem::time_not_set);
+  rec.start(1.0, b);
+  EXPECT_EQ(rec.record(1.0, b, b).problem, Problem::out_of_order_time);
+  EXPECT_EQ(rec.record(0.5, b, b).problem, Problem::out_of_order_time);
+  EXPECT_EQ(rec.records().size(), 1u);
+  EXPECT_TRUE(rec.record(2.0, b, b).accepted());
+  EXPECT_EQ(rec.records().size(), 2u);
+}
+
+}  // namespace
