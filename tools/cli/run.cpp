@@ -91,9 +91,11 @@ int run_command(Args args, std::ostream& out, std::ostream& err) {
   std::string footer = "\nPipelines and the files they read:\n";
   for (const auto& p : run_pipelines()) {
     CLI::App* sub = app.add_subcommand(std::string(p.name), std::string(p.summary));
-    sub->add_option("--data", common.data, "directory of logs (ctxfuse sim --out DIR)")->required()->check(CLI::ExistingDirectory);
+    sub->add_option("--data", common.data, p.run_folder ? "the recording's folder (see below)" : "directory of logs (ctxfuse sim --out DIR)")
+        ->required()
+        ->check(CLI::ExistingDirectory);
     sub->add_option("--json", common.json, "write the scores and the pipeline's results as JSON");
-    sub->add_option("--out", common.out, "write the trajectory as CSV (t,east,north,up)");
+    sub->add_option("--out", common.out, p.run_folder ? "write the trajectory as CSV (see the pipeline)" : "write the trajectory as CSV (t,east,north,up)");
     sub->add_option("--plot", common.plot, "write the pipeline's plots (PNG, gnuplot) into this directory");
     slots.push_back({&p, sub, p.add_options(*sub)});
     footer += "  " + std::string(p.name) + ": " + std::string(p.reads) + "\n";
@@ -106,7 +108,10 @@ int run_command(Args args, std::ostream& out, std::ostream& err) {
   }
   if (const auto rc = parse_options(app, args, out, err)) return *rc;
   for (const auto& s : slots)
-    if (s.app->parsed()) return run_pipeline(*s.pipeline, s.options, common, out, err);
+    if (s.app->parsed()) {
+      if (s.pipeline->run_folder) return s.pipeline->run_folder(s.options, {common.data, common.out, common.json, common.plot, out}, err);
+      return run_pipeline(*s.pipeline, s.options, common, out, err);
+    }
   err << "ctxfuse run: no pipeline given\n";
   return 2;
 }

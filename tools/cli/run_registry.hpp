@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <string>
 #include <ostream>
 #include <string_view>
 #include <vector>
@@ -37,6 +38,14 @@ struct RunOutput {
   Json json;  // pipeline-specific results, written under "pipeline" in --json
 };
 
+/// For a pipeline that reads its own folder format (not the logs of `ctxfuse sim`): the common
+/// options as given; the pipeline reads, scores and writes its outputs itself.
+struct FolderRunInput {
+  std::filesystem::path data_dir;
+  std::string out_csv, json, plot;  // empty: not asked for
+  std::ostream& out;
+};
+
 struct RunPipeline {
   std::string_view name;
   std::string_view summary;
@@ -46,6 +55,8 @@ struct RunPipeline {
   std::function<std::shared_ptr<void>(CLI::App& app)> add_options;
   // Returns 0 on success, 1 on a runtime failure (message already written to err).
   std::function<int(const std::shared_ptr<void>& options, const RunInput& in, RunOutput& out, std::ostream& err)> run;
+  // Set instead of `run` by a pipeline with its own folder format (e.g. `uwb` on a Hanyang case).
+  std::function<int(const std::shared_ptr<void>& options, const FolderRunInput& in, std::ostream& err)> run_folder = {};
 };
 
 inline std::vector<RunPipeline>& run_pipelines() {

@@ -15,6 +15,7 @@
 #include <Eigen/LU>
 
 #include <cmath>
+#include <limits>
 #include <span>
 
 #include "ctxfuse/core/status.hpp"
@@ -28,6 +29,10 @@ struct MultilaterationOptions {
   double max_rms_m = 0.45;    // residual test; infinity turns it off
   int max_iterations = 20;
   double min_information = 1e-3;  // det(J'J) below it: degenerate geometry
+  // Where Gauss-Newton starts; not finite: near the anchors' centroid. With anchors spread
+  // over a few metres and the tag far away the cost has a mirror-image minimum, so a caller
+  // that must not land in it solves from several starts and keeps the best fit.
+  Eigen::Vector2d initial = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
 };
 
 struct Multilateration {
@@ -48,11 +53,14 @@ inline Multilateration multilaterate(std::span<const io::UwbRange> ranges, const
       out.status = Status::invalid(Problem::non_finite_measurement);
       return out;
     }
-  Eigen::Vector2d p = Eigen::Vector2d::Zero();
-  for (const auto& r : ranges) p += r.anchor_position.head<2>();
-  p /= static_cast<double>(ranges.size());
-  // Off the centroid a little: on an anchor the Jacobian row vanishes.
-  p += Eigen::Vector2d(0.37, 0.23);
+  Eigen::Vector2d p = o.initial;
+  if (!p.allFinite()) {
+    p.setZero();
+    for (const auto& r : ranges) p += r.anchor_position.head<2>();
+    p /= static_cast<double>(ranges.size());
+    // Off the centroid a little: on an anchor the Jacobian row vanishes.
+    p += Eigen::Vector2d(0.37, 0.23);
+  }
   Eigen::Matrix2d JtJ;
   double rms = 0.0;
   for (int iter = 0;; ++iter) {

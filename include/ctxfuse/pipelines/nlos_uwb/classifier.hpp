@@ -1,0 +1,139 @@
+// Per-range NLOS classification of the paper (eq. 1-8): SVM probability p1 on (v_u, v_i),
+// consistency probability p2 from e = |d_rho| - d_d, Dempster-Shafer R = p1 p2 / (p1 p2 +
+// q1 q2), NLOS when R > 0.8. Without an IMU the vehicle speed v_i and the travelled distance
+// d_d come from the estimator's own velocity (the caller passes its speed).
+//
+// The SVM is trained on labelled ranges of other recordings (eval/nlos_uwb.hpp builds them;
+// labels from residuals against those recordings' references), never on the run it scores.
+// Without a model p1 is absent and R is p2 alone (D-S with one source).
+//
+// Per-anchor state is a fixed table of kMaxAnchors slots filled on first sight of an anchor;
+// an anchor beyond it gets no evidence (verdict NaN, LOS), never an allocation.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cmath>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "ctxfuse/classify/consistency.hpp"
+#include "ctxfuse/classify/dempster_shafer.hpp"
+#include "ctxfuse/classify/svm.hpp"
+#include "ctxfuse/classify/svm_train.hpp"
+#include "ctxfuse/features/nlos.hpp"
+#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/pipelines/nlos_uwb/policies.hpp"
+#include "ctxfuse/pipelines/nlos_uwb/settings.hpp"
+
+namespace ctxfuse::pipelines::nlos_uwb {
+
+using NlosSvm = classify::SvmModel<2, 2>;
+inline constexpr int kNlosLabel = 1, kLosLabel = 0;
+
+/// The SVM's input: range rate v_u [m/s] and vehicle speed v_i [m/s].
+struct SvmInput {
+  double range_rate_mps = std::nan("");
+  double speed_mps = std::nan("");
+  Eigen::Vector2d vector() const { return {range_rate_mps, speed_mps}; }
+  bool finite() const { return std::isfinite(range_rate_mps) && std::isfinite(speed_mps); }
+};
+
+class NlosClassifier {
+ public:
+  static constexpr int kMaxAnchors = 16;
+
+  explicit NlosClassifier(const Settings& s, std::optional<NlosSvm> svm = std::nullopt)
+      : consistency_(s.consistency()), decision_{s.nlos_belief_threshold}, svm_(std::move(svm)), max_speed_(s.max_speed_mps),
+        max_range_(s.max_range_m) {}
+
+  bool has_svm() const { return svm_.has_value(); }
+
+  /// Verdict on range r with the platform's current speed; `input` receives the SVM's features
+  /// (NaN when the anchor has no previous range). Every range of the run must come through
+  /// here, in time order, attached or not: v_u and d_rho are differences of consecutive ranges.
+  RangeVerdict classify(const io::UwbRange& r, double speed_mps, SvmInput* input = nullptr) {
+    RangeVerdict v;
+    features::NlosFeatureExtractor* x = extractor_of(r.anchor_id);
+    if (!x) return v;
+    features::NlosFeatures f;
+    const features::UwbRangeSample sample{r.t, r.range_m, r.rssi_dbm, r.rssi_first_path_dbm};
+    const double speed = std::isfinite(speed_mps) ? speed_mps : 0.0;
+    if (x->push(sample, speed, f) != features::NlosFeatureStatus::ok) return v;
+    const SvmInput in{f.range_rate_mps, f.vehicle_speed_mps};
+    if (input) *input = in;
+    v.p2 = consistency_.nlos_probability(f.consistency_error_m);
+    if (svm_ && in.finite()) {
+      classify::SvmPrediction<2> out;
+      if (classify::svm_predict(*svm_, Eigen::Vector2d(in.vector()), out) == classify::SvmStatus::ok && out.has_probabilities)
+        v.p1 = out.probabilities[svm_->labels[0] == kNlosLabel ? 0 : 1];
+    }
+    if (std::isnan(v.p1)) {
+      v.R = v.p2;
+    } else {
+      const classify::DsResult ds = classify::combine_probabilities(v.p1, v.p2);
+      // Total conflict (one source certain of each side) leaves no belief: no decision.
+      v.R = ds.status == classify::DsStatus::ok ? ds.nlos_belief() : std::nan("");
+    }
+    v.nlos = !std::isnan(v.R) && decision_(v.R);
+    return v;
+  }
+
+ private:
+  features::NlosFeatureExtractor* extractor_of(int anchor) {
+    for (int i = 0; i < used_; ++i)
+      if (ids_[static_cast<std::size_t>(i)] == anchor) return &extractors_[static_cast<std::size_t>(i)];
+    if (used_ == kMaxAnchors) return nullptr;
+    const auto i = static_cast<std::size_t>(used_++);
+    ids_[i] = anchor;
+    extractors_[i].max_speed_mps = max_speed_;
+    extractors_[i].max_range_m = max_range_;
+    return &extractors_[i];
+  }
+
+  classify::ConsistencyModel consistency_;
+  classify::NlosDecisionRule decision_;
+  std::optional<NlosSvm> svm_;
+  double max_speed_, max_range_;
+  std::array<int, kMaxAnchors> ids_{};
+  std::array<features::NlosFeatureExtractor, kMaxAnchors> extractors_{};
+  int used_ = 0;
+};
+
+/// Labelled SVM rows (from eval/nlos_uwb.hpp: runs on other recordings, residual labels).
+struct LabelledSvmRows {
+  std::vector<SvmInput> inputs;
+  std::vector<int> labels;  // kNlosLabel / kLosLabel
+};
+
+/// Trains p1's SVM (RBF, Platt probabilities) on a balanced subsample: every NLOS row and as
+/// many LOS rows, both thinned evenly to at most settings.svm_rows_per_class. Throws
+/// std::invalid_argument when a class is missing or the rows are unusable.
+inline NlosSvm train_nlos_svm(const LabelledSvmRows& rows, const Settings& s) {
+  std::vector<std::size_t> nlos, los;
+  for (std::size_t i = 0; i < rows.inputs.size(); ++i)
+    if (rows.inputs[i].finite()) (rows.labels[i] == kNlosLabel ? nlos : los).push_back(i);
+  if (nlos.empty() || los.empty()) throw std::invalid_argument("train_nlos_svm: both classes needed, got " +
+                                                               std::to_string(nlos.size()) + " NLOS and " +
+                                                               std::to_string(los.size()) + " LOS rows");
+  const std::size_t per_class = std::min({nlos.size(), los.size(), static_cast<std::size_t>(s.svm_rows_per_class)});
+  classify::SvmFeatures<2> x(static_cast<Eigen::Index>(2 * per_class), 2);
+  std::vector<int> y;
+  y.reserve(2 * per_class);
+  auto take = [&](const std::vector<std::size_t>& from, int label) {
+    for (std::size_t k = 0; k < per_class; ++k) {
+      const std::size_t i = from[k * from.size() / per_class];  // evenly spaced in time
+      x.row(static_cast<Eigen::Index>(y.size())) = rows.inputs[i].vector().transpose();
+      y.push_back(label);
+    }
+  };
+  take(nlos, kNlosLabel);
+  take(los, kLosLabel);
+  classify::SvmTrainOptions o;
+  o.probability = true;
+  return classify::train_svm<2, 2>(x, y, o);
+}
+
+}  // namespace ctxfuse::pipelines::nlos_uwb

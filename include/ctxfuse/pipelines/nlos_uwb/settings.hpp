@@ -1,0 +1,96 @@
+// Settings of the NLOS-robust UWB pipeline (NLOS paper, section C of the papers digest), one
+// set for every recording: nothing here is chosen per case or fitted to a score. Each value
+// says where it comes from.
+#pragma once
+
+#include <cmath>
+#include <string>
+
+#include "ctxfuse/classify/consistency.hpp"
+#include "ctxfuse/policies/health.hpp"
+
+namespace ctxfuse::pipelines::nlos_uwb {
+
+struct Settings {
+  // --- UWB ranging -------------------------------------------------------------------------
+  // 1-sigma of one DW1000 two-way range. The data sheet gives +-10 cm accuracy, the paper
+  // uses 10 cm, and the Hanyang static LOS set (Static_measurements/LOS, 385 files at known
+  // distances 2-60 m, 13 heights) agrees: the spread of one file is 2.5 cm (median std) and
+  // the per-file mean error varies by 8.6 cm (std over files), sqrt(2.5^2 + 8.6^2) = 9 cm.
+  double range_sigma_m = 0.10;
+  // Ranges outside (0, max] are refused: a DW1000 link does not close beyond about 300 m
+  // (data sheet, 6.8 Mb/s mode, outdoors), so a larger value is a corrupt record.
+  double max_range_m = 300.0;
+
+  // --- Tag geometry ------------------------------------------------------------------------
+  // The tag rides a known height above the reference frame's ground: the dataset authors'
+  // evaluation compares the estimate's z with the reference z + 1 m (data README), i.e. the
+  // antenna is mounted 1 m above the reference point. The anchors are 0.5 m and 1.97 m
+  // high, spread 1.9 m x 1.7 m, so z is not observable tens of metres away: it is held.
+  double tag_height_m = 1.0;
+
+  // --- Epochs ------------------------------------------------------------------------------
+  // Each anchor ranges at 10 Hz and the four answer within a few ms of each other; an epoch
+  // takes one range per anchor within half the 100 ms period of its first range.
+  double epoch_window_s = 0.05;
+
+  // --- Motion model (no IMU in the Hanyang recordings) -------------------------------------
+  // Constant velocity driven by white acceleration of spectral density q [m^2/s^3]. The
+  // platform moves at walking to jogging speed (0.7-0.9 m/s mean) on a track with turns of a
+  // few metres radius: v^2 / r about 0.3-1 m/s^2 in turns and similar braking, i.e. an
+  // acceleration that changes by ~1 m/s^2 within ~1 s: q = (1 m/s^2)^2 / 1 s.
+  double accel_psd = 1.0;
+  // The start: position from the first accepted snapshot fix with its covariance; velocity
+  // unknown within the platform's top speed (~3 m/s, 1 sigma).
+  double initial_speed_sigma_mps = 3.0;
+  // Speeds above this are not a wheeled platform at this site: features refuse them.
+  double max_speed_mps = 30.0;
+
+  // --- Innovation gate of the EKF ----------------------------------------------------------
+  // The textbook 99 % chi-square test (1 dof per range): one in a hundred good ranges lost.
+  double gate_probability = 0.99;
+  // Lock-out of one anchor: every attached range of it gated for 2 s, at least 5 of them
+  // (policies/health.hpp's defaults, PX4 EKF2's practice): the belief, not the anchor, is off.
+  policies::SourceHealthOptions lockout{};
+
+  // --- NLOS classifiers (paper eq. 3-8) ----------------------------------------------------
+  // Consistency model: the paper's thresholds (1, 2, 3 sigma) and probabilities with the
+  // ranging sigma above.
+  classify::ConsistencyModel consistency() const {
+    classify::ConsistencyModel m;
+    m.sigma_uwb = range_sigma_m;
+    return m;
+  }
+  // D-S decision threshold and the mixed-epoch belief of the attach rule (paper: 0.8, 0.7).
+  double nlos_belief_threshold = 0.8;
+  double mixed_epoch_belief = 0.7;
+  // Residual labels for training and scoring the classifiers: a range is NLOS when it exceeds
+  // the reference distance by more than 3 range sigmas (issue 16).
+  double label_sigma_multiple = 3.0;
+  // SVM on (v_u, v_i): libsvm's C = 1 and, in standardised units, its default gamma 1/dim
+  // (the paper picks gamma by cross-validation; eval/nlos_uwb.hpp measures that choice by
+  // 5-fold CV on the training cases). Training takes every NLOS-labelled row and as many LOS
+  // rows (evenly spaced in time), up to this many per class: balanced classes as in the
+  // paper's protocol (half the ranges NLOS), so p1 carries no prior of its own.
+  int svm_rows_per_class = 1500;
+
+  std::string validate() const {
+    auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
+    if (!positive(range_sigma_m)) return "range_sigma_m must be finite and > 0";
+    if (!positive(max_range_m)) return "max_range_m must be finite and > 0";
+    if (!std::isfinite(tag_height_m)) return "tag_height_m must be finite";
+    if (!positive(epoch_window_s)) return "epoch_window_s must be finite and > 0";
+    if (!positive(accel_psd)) return "accel_psd must be finite and > 0";
+    if (!positive(initial_speed_sigma_mps)) return "initial_speed_sigma_mps must be finite and > 0";
+    if (!positive(max_speed_mps)) return "max_speed_mps must be finite and > 0";
+    if (!(gate_probability > 0.0 && gate_probability < 1.0)) return "gate_probability must lie in (0, 1)";
+    if (!(nlos_belief_threshold > 0.0 && nlos_belief_threshold < 1.0)) return "nlos_belief_threshold must lie in (0, 1)";
+    if (!(mixed_epoch_belief > 0.0 && mixed_epoch_belief < 1.0)) return "mixed_epoch_belief must lie in (0, 1)";
+    if (!positive(label_sigma_multiple)) return "label_sigma_multiple must be finite and > 0";
+    if (!positive(lockout.timeout_s) || lockout.min_rejections < 1) return "lockout needs timeout_s > 0 and min_rejections >= 1";
+    if (svm_rows_per_class < 10) return "svm_rows_per_class must be >= 10";
+    return consistency().validate();
+  }
+};
+
+}  // namespace ctxfuse::pipelines::nlos_uwb

@@ -1,0 +1,178 @@
+// The NLOS-robust UWB pipeline on the Hanyang Trajectory_A recordings (real data; skipped
+// without CTXFUSE_DATA_DIR's uwb-outdoor-hanyang, a failure under CI=true). Each case is scored
+// with the dataset authors' protocol beside their own LS and ESKF figures read from the case's
+// RMSD_results.txt. The SVM of p1 is trained on the other three cases (leave one case out), never
+// on the scored one. One set of settings (nu::Settings{}) for all four.
+//
+// Each measured value is pinned within 3 % of itself (the runs are deterministic; 3 % leaves
+// room for compiler and libm differences, and is far below the margins to the authors' figures
+// that the test also asserts where we are below them).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <string>
+
+#include "ctxfuse/eval/nlos_uwb.hpp"
+#include "support/data_dir.hpp"
+
+namespace ev = ctxfuse::eval;
+namespace nu = ctxfuse::pipelines::nlos_uwb;
+
+namespace {
+
+struct Expected {
+  const char* dir;
+  double paper_rule, per_range, gate, least_squares;  // EKF variants and LS: measured 2-D RMSE [m]
+  double smoother, smoother_lag9;                      // fixed-lag smoother: newest, 9 epochs back
+  double ds_accuracy, ds_precision;                    // measured D-S identification
+};
+
+// Measured with this file's code (docs/results.md, "NLOS-robust UWB (paper C), real data").
+constexpr Expected kCases[] = {
+    {"LOS/Trajectory_A/Case_1", 1.132, 0.908, 0.842, 0.871, 0.848, 0.777, 0.915, 0.455},
+    {"LOS/Trajectory_A/Case_2", 0.860, 0.634, 0.604, 2.940, 0.598, 0.480, 0.930, 0.740},
+    {"NLOS/Trajectory_A/Case_1", 0.907, 0.833, 0.827, 0.856, 0.837, 0.774, 0.908, 0.576},
+    {"NLOS/Trajectory_A/Case_2", 0.962, 0.908, 0.887, 1.398, 0.883, 0.798, 0.908, 0.745},
+};
+
+void pin(double measured, double expected, const std::string& what) {
+  EXPECT_NEAR(measured, expected, 0.03 * expected) << what;
+}
+
+class NlosUwbRealData : public ::testing::TestWithParam<Expected> {};
+
+}  // namespace
+
+TEST_P(NlosUwbRealData, BelowTheAuthorsWhereMeasuredSo) {
+  const Expected& x = GetParam();
+  CTXFUSE_REQUIRE_DATA(dir, std::string("uwb-outdoor-hanyang/Dynamic_measurements/") + x.dir);
+  const auto training = ev::other_hanyang_cases(dir);
+  ASSERT_EQ(training.size(), 3u);
+  const auto rep = ev::evaluate_nlos_uwb_case(dir, training, nu::Settings{}, ev::trajectory_a_span());
+  ASSERT_TRUE(rep.svm);
+  const double authors_ls = rep.authors.at("LS RMSE_2d"), authors_eskf = rep.authors.at("ESKF RMSE_2d");
+  const double best_authors = std::min(authors_ls, authors_eskf);
+  const double paper = rep.variant("ekf_gate_paper_rule").rmse.rmse_2d;
+  const double per_range = rep.variant("ekf_gate_per_range").rmse.rmse_2d;
+  const double gate = rep.variant("ekf_gate").rmse.rmse_2d;
+  const double ls = rep.variant("least_squares").rmse.rmse_2d;
+  const double smoother = rep.variant("smoother_gate").rmse.rmse_2d;
+  const double lag9 = rep.variant("smoother_gate_lag9").rmse.rmse_2d;
+  std::printf("%s: paper rule %.3f, per range %.3f, gate only %.3f, smoother %.3f / lag 9 %.3f, LS %.3f; authors LS %.3f ESKF %.3f\n",
+              x.dir, paper, per_range, gate, smoother, lag9, ls, authors_ls, authors_eskf);
+  pin(paper, x.paper_rule, "EKF + gate + paper epoch rule");
+  pin(per_range, x.per_range, "EKF + gate + per-range rule");
+  pin(gate, x.gate, "EKF + gate");
+  pin(ls, x.least_squares, "least squares");
+  pin(smoother, x.smoother, "smoother, newest state");
+  pin(lag9, x.smoother_lag9, "smoother, 9 epochs back");
+  // The gated EKF, with and without the per-range rule, is below both of the authors' figures
+  // on every case; the paper's epoch rule everywhere but LOS case 1 (1.13 m against their LS
+  // 1.04 m: it leaves out 17 % of the epochs on false NLOS calls).
+  EXPECT_LT(gate, best_authors);
+  EXPECT_LT(per_range, best_authors);
+  EXPECT_LT(smoother, best_authors);
+  // The state 9 epochs back has 0.9 s of later ranges: better than any causal estimate here.
+  EXPECT_LT(lag9, std::min(gate, smoother));
+  if (std::string(x.dir) != "LOS/Trajectory_A/Case_1") {
+    EXPECT_LT(paper, best_authors);
+  }
+  // Every range entering without a gate: gross ranges (up to 19 m off) and the mirror image
+  // make it several metres; the motion model alone is tens of metres off.
+  EXPECT_GT(rep.variant("ekf").rmse.rmse_2d, 3.0 * gate);
+  EXPECT_GT(rep.variant("motion_model_only").rmse.rmse_2d, 10.0 * gate);
+  // Identification: D-S more precise than the SVM alone (the paper's point of fusing them).
+  const auto& id = rep.identification;
+  pin(id.ds.accuracy, x.ds_accuracy, "D-S accuracy");
+  pin(id.ds.precision, x.ds_precision, "D-S precision");
+  EXPECT_GT(id.ds.precision, id.svm.precision);
+  EXPECT_GT(id.ds.accuracy, id.svm.accuracy);
+}
+
+INSTANTIATE_TEST_SUITE_P(TrajectoryA, NlosUwbRealData, ::testing::ValuesIn(kCases), [](const auto& info) {
+  std::string n = info.param.dir;
+  std::replace(n.begin(), n.end(), '/', '_');
+  return n;
+});
+
+// Why NLOS case 1 stays above 0.6 m (docs/results.md): measured, never applied to the runs.
+TEST(NlosUwbRealDataDiagnostics, TimeOffsetGeometryAndProcessNoise) {
+  CTXFUSE_REQUIRE_DATA(dir, "uwb-outdoor-hanyang/Dynamic_measurements/NLOS/Trajectory_A/Case_1");
+  const nu::Settings s;
+  const auto ranges = ctxfuse::io::read_hanyang_uwb(dir).uwb_ranges();
+  const auto ref = ctxfuse::io::read_hanyang_reference(dir);
+  const std::span<const ctxfuse::io::UwbRange> rs(ranges);
+  const auto span = ev::trajectory_a_span();
+  const auto ekf = nu::run(rs, nu::RangeEkf<>(s), nu::NoNlosHandling{}, nu::NlosClassifier(s), s);
+  const auto ls = nu::least_squares_track(rs, s);
+  auto shifted = [&](const nu::Track& t, double shift) {
+    auto pts = ev::timed_points(t);
+    for (auto& p : pts) p.t += shift;
+    return ev::hanyang_rmse_2d(pts, ref, span).rmse_2d;
+  };
+  // (1) A time offset between ranges and reference: both the EKF and the filter-free LS are
+  // best with their times moved 0.4 s earlier, by the same amount: not filter lag.
+  const double ekf0 = shifted(ekf, 0.0), ekf4 = shifted(ekf, -0.4), ls0 = shifted(ls, 0.0), ls4 = shifted(ls, -0.4);
+  std::printf("time shift -0.4 s: EKF %.3f -> %.3f m, LS %.3f -> %.3f m\n", ekf0, ekf4, ls0, ls4);
+  EXPECT_LT(ekf4, 0.95 * ekf0);
+  EXPECT_LT(ls4, 0.95 * ls0);
+  for (double other : {-0.6, -0.2, 0.2}) {
+    EXPECT_GT(shifted(ekf, other), ekf4) << other;
+    EXPECT_GT(shifted(ls, other), ls4) << other;
+  }
+  // Along-track mean error: about -0.4 m at no shift (the estimate trails), near 0 at -0.4 s.
+  auto along_mean = [&](double shift) {
+    double sum = 0.0;
+    int n = 0;
+    const auto r = ev::hanyang_rmse_2d(ev::timed_points(ekf), ref, span);
+    for (const auto& e : ekf.estimates) {
+      const double t = e.t + shift;
+      if (t < r.t_begin || t > r.t_end) continue;
+      const Eigen::Vector3d a = ev::reference_at(ref, t), b = ev::reference_at(ref, t + 0.2);
+      const Eigen::Vector2d d = (b - a).head<2>();
+      if (!(d.norm() > 0.05)) continue;  // standing: no along-track direction
+      sum += (e.position - a.head<2>()).dot(d.normalized());
+      ++n;
+    }
+    return sum / n;
+  };
+  const double along0 = along_mean(0.0), along4 = along_mean(-0.4);
+  std::printf("along-track mean error: %.3f m at 0 s, %.3f m at -0.4 s\n", along0, along4);
+  EXPECT_LT(along0, -0.3);
+  EXPECT_LT(std::abs(along4), 0.1);
+  // (2) Geometry: the error grows with the distance from the anchors (1.9 x 1.7 m apart).
+  const auto r = ev::hanyang_rmse_2d(ev::timed_points(ekf), ref, span);
+  std::array<double, 7> sq{};
+  std::array<int, 7> n{};
+  for (const auto& e : ekf.estimates) {
+    if (e.t < r.t_begin || e.t > r.t_end) continue;
+    const Eigen::Vector3d p = ev::reference_at(ref, e.t);
+    const auto bin = static_cast<std::size_t>(std::min(6.0, std::hypot(p.x() - 2.0, p.y()) / 8.0));
+    sq[bin] += (e.position - p.head<2>()).squaredNorm();
+    ++n[bin];
+  }
+  std::vector<double> by_distance;
+  for (std::size_t b = 0; b < sq.size(); ++b)
+    if (n[b] > 0) {
+      by_distance.push_back(std::sqrt(sq[b] / n[b]));
+      std::printf("  %2zu-%2zu m from the anchors: %4d estimates, RMSE %.3f m\n", 8 * b, 8 * b + 8, n[b], by_distance.back());
+    }
+  ASSERT_GE(by_distance.size(), 5u);
+  EXPECT_GT(by_distance.back(), 2.5 * by_distance.front());
+  // Gross ranges: the largest range residual against the reference, in metres.
+  double worst = 0.0;
+  for (const auto& rec : ekf.ranges)
+    if (const double e = ev::range_residual(rec.range, ref, s.tag_height_m); std::abs(e) > std::abs(worst)) worst = e;
+  std::printf("largest range residual %.2f m\n", worst);
+  EXPECT_GT(std::abs(worst), 10.0);
+  // (3) Not the process noise: q ten times smaller or three times larger moves it < 3 %.
+  for (double q : {0.1, 3.0}) {
+    nu::Settings sq_settings;
+    sq_settings.accel_psd = q;
+    const auto t = nu::run(rs, nu::RangeEkf<>(sq_settings), nu::NoNlosHandling{}, nu::NlosClassifier(sq_settings), sq_settings);
+    const double e = ev::hanyang_rmse_2d(ev::timed_points(t), ref, span).rmse_2d;
+    std::printf("q = %.1f m^2/s^3: %.3f m (q = 1: %.3f m)\n", q, e, ekf0);
+    EXPECT_NEAR(e, ekf0, 0.03 * ekf0);
+  }
+}
