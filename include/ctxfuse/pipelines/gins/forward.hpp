@@ -1,0 +1,330 @@
+// The forward pass of the GNSS/INS error-state filter, as a handler of io::replay over the IMU
+// stream and the GNSS fixes (and a magnetometer stream when there is one):
+//   propagate(u, dt)  mounting rotation on input, eskf::predict with the full strapdown, the
+//                     transition composed into the step records (filters/rts.hpp);
+//   on(ImuSample)     static detection from the raw rates; every constraint_interval_s the
+//                     constraints switched on: ZUPT / ZIHR while static, NHC while moving;
+//   on(GnssFix)       decimation and outage windows decide whether the fix is used: GNSS
+//                     position (lever arm) and velocity, each with a one-tailed chi-square
+//                     gate; a withheld fix still closes an epoch, so the trajectory has a row
+//                     at every GNSS stamp.
+// Before the filter starts it levels on the static start (roll, pitch, gyro bias from the
+// mean of its samples) and waits for a dynamic alignment (two used fixes 1 s and > 5 m apart).
+// An epoch is every time at which a row is wanted or an update happens; its prior and
+// posterior are recorded for the RTS smoother.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <functional>
+#include <optional>
+#include <vector>
+
+#include "ctxfuse/filters/eskf.hpp"
+#include "ctxfuse/filters/rts.hpp"
+#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/models/ins_augment.hpp"
+#include "ctxfuse/models/ins_input.hpp"
+#include "ctxfuse/models/ins_motion.hpp"
+#include "ctxfuse/models/ins_updates.hpp"
+#include "ctxfuse/pipelines/gins/gnss_schedule.hpp"
+#include "ctxfuse/pipelines/gins/settings.hpp"
+#include "ctxfuse/pipelines/gins/static_start.hpp"
+
+namespace ctxfuse::pipelines::gins {
+
+using Nav15 = models::InsNavModel<models::FullStrapdown>;
+/// The 20-state layout: mounting pitch/heading of the vehicle in the body frame and the lever
+/// arm from the IMU to the vehicle point where the non-holonomic constraint holds.
+using Nav20 = models::Augmented<Nav15, Block<"mount", 2>, Block<"lever", 3>>;
+
+/// The installation's IMU axes turned by yaw, then pitch, then roll (about the turned axes) are
+/// the body axes: R = Rz(yaw) Ry(pitch) Rx(roll) holds the body axes in IMU coordinates, so a
+/// vector's body coordinates are R' v_imu (the convention of RTKLIB-style rpy installation
+/// figures: with the drive's 180 / -6.79 / 185.35 deg the static start's specific force comes
+/// out as (0.0, 0.19, -9.97) m/s^2, level within the parking place's 1 deg).
+inline Eigen::Matrix3d body_from_imu(const Installation& inst) {
+  const Eigen::Vector3d a = inst.imu_rpy_deg * kDeg;
+  return models::mounting_rotation(a(0), a(1), a(2)).transpose();
+}
+
+template <class Model>
+models::NavState nav_part(const typename Model::State& x) {
+  if constexpr (requires { Model::base_part(x); }) return Model::base_part(x); else return x;
+}
+
+struct PassCounts {
+  std::size_t imu_steps = 0, imu_refused = 0, filter_failures = 0;
+  std::size_t gnss_used = 0, gnss_withheld = 0, gnss_decimated = 0, gnss_gated = 0, gnss_refused = 0, gnss_released = 0;
+  std::size_t velocity_used = 0, velocity_gated = 0;
+  std::size_t zupt = 0, zupt_gated = 0, zihr = 0, zihr_gated = 0, nhc = 0, nhc_gated = 0, mag = 0, mag_gated = 0;
+  std::size_t static_samples = 0;
+};
+
+template <class Model>
+class ForwardPass {
+ public:
+  using S = typename Model::State;
+  using B = eskf::Belief<Model>;
+
+  ForwardPass(const Settings& s, const Installation& inst, const Constraints& c, std::vector<OutageWindow> windows,
+              double gnss_rate_hz)
+      : s_(s), c_(c), windows_(std::move(windows)), decimator_(gnss_rate_hz),
+        detector_(s.static_window, s.static_gyro_threshold, s.static_accel_threshold), gate_(s.gate_probability) {
+    Nav15* nav = nullptr;
+    if constexpr (requires { model_.base; }) nav = &model_.base; else nav = &model_;
+    nav->gyro_noise_density = s.gyro_noise_density;
+    nav->accel_noise_density = s.accel_noise_density;
+    nav->gyro_bias = models::GaussMarkov{s.gyro_bias_density};
+    nav->accel_bias = models::GaussMarkov{s.accel_bias_density};
+    imu_.body_from_imu = body_from_imu(inst);
+    gnss_.lever_arm = inst.gnss_lever_m - inst.imu_lever_m;
+    gnss_velocity_.lever_arm = gnss_.lever_arm;
+    nhc_.vehicle.lever_arm = -inst.imu_lever_m;  // IMU -> system origin
+    nhc_.sigma = s.nhc_sigma_mps;
+    zupt_.sigma = s.zupt_sigma_mps;
+    zihr_.sigma = s.zihr_sigma;
+    mag_heading_.sigma = s.mag_heading_sigma;
+    align_.interval = s.alignment_interval_s;
+    align_.min_distance = s.alignment_min_distance_m;
+  }
+
+  void reserve(std::size_t epochs) { rts_.reserve(epochs); used_.reserve(epochs); }
+  void set_progress(std::function<void(double)> f, double t_first, double t_last) {
+    progress_ = std::move(f);
+    t_first_ = t_first;
+    t_span_ = t_last > t_first ? t_last - t_first : 1.0;
+  }
+
+  void propagate(const io::ImuSample& u, double dt) {
+    if (!aligned_) return;
+    close_epoch();
+    models::BodyIncrements inc;
+    if (!imu_.from_rates(u.gyro, u.accel, dt, inc).accepted()) {
+      ++counts_.imu_refused;
+      return;
+    }
+    SquareMatrix<Model::dim> F;
+    const Status st = eskf::predict(model_, belief_, inc, dt, {}, &F);
+    if (!st.accepted()) {
+      ++counts_.filter_failures;
+      return;
+    }
+    rts_.predicted(F);
+    ++counts_.imu_steps;
+  }
+
+  void on(const io::ImuSample& u) {
+    const Eigen::Vector3d w = imu_.body_from_imu * u.gyro, f = imu_.body_from_imu * u.accel;
+    if (!w.allFinite() || !f.allFinite()) return;
+    gyro_body_ = w;
+    Eigen::Vector2d horizontal = Eigen::Vector2d::Zero();
+    if (aligned_) {
+      const models::NavState x = nav_part<Model>(belief_.nominal);
+      horizontal = (x.get<"theta">() * (f - x.get<"ba">())).head<2>();
+    }
+    const bool st = detector_.push(w, f, horizontal);
+    if (st) ++counts_.static_samples;
+    // The static start: every static sample before the alignment.
+    if (st && !aligned_) {
+      start_acc_.add(u.t, w, f);
+      start_ = start_acc_.stats();
+    }
+    if (progress_ && ++since_progress_ >= 2000) {
+      since_progress_ = 0;
+      progress_((u.t - t_first_) / t_span_);
+    }
+    if (!aligned_) return;
+    if (detector_.entered_static())
+      held_heading_ = models::heading_of(nav_part<Model>(belief_.nominal).template get<"theta">().toRotationMatrix());
+    if (!st) held_heading_.reset();
+    if (!c_.any() || u.t < next_constraint_t_) return;
+    next_constraint_t_ = u.t + s_.constraint_interval_s - 1e-6;
+    if (st) {
+      if (c_.zupt) count(update(u.t, zupt_, Vector<3>(Vector<3>::Zero())), counts_.zupt, counts_.zupt_gated);
+      if (c_.zihr && held_heading_) count(update(u.t, zihr_, Vector<1>(*held_heading_)), counts_.zihr, counts_.zihr_gated);
+    } else {
+      if (c_.nhc) {
+        nhc_.vehicle.gyro = w;
+        count(update(u.t, nhc_, Vector<2>(Vector<2>::Zero())), counts_.nhc, counts_.nhc_gated);
+      }
+    }
+  }
+
+  void on(const io::MagSample& m) {
+    if (!aligned_ || !c_.mag) return;
+    const Eigen::Matrix3d C = nav_part<Model>(belief_.nominal).template get<"theta">().toRotationMatrix();
+    const Eigen::Vector3d b = imu_.body_from_imu * m.field_ut;
+    if (!mag_.active()) {
+      if (detector_.is_static()) mag_.start(C, b);
+    } else if (const auto z = mag_.heading(C, b)) {
+      count(update(m.t, mag_heading_, Vector<1>(*z)), counts_.mag, counts_.mag_gated);
+    }
+  }
+
+  void on(const io::GnssFix& fix) {
+    const bool kept = decimator_.keep(fix.t);
+    const bool withheld = in_any(windows_, fix.t);
+    const bool use = kept && !withheld && fix.frame == io::PositionFrame::geodetic;
+    counts_.gnss_decimated += kept ? 0 : 1;
+    counts_.gnss_withheld += kept && withheld ? 1 : 0;
+    const Eigen::Vector3d z(fix.position(0) * kDeg, fix.position(1) * kDeg, fix.position(2));
+    const Eigen::Matrix3d cov = floored(models::ned_from_enu_cov(fix.cov), s_.gnss_position_sigma_floor_m);
+    if (!aligned_) {
+      if (use) try_align(fix, z, cov);
+      return;
+    }
+    open_epoch(fix.t);
+    if (!use) return;
+    if (!cov.allFinite() || !z.allFinite()) {
+      ++counts_.gnss_refused;
+      return;
+    }
+    gnss_.R = models::geodetic_position_noise(z, cov);
+    // After gate_release_count fixes in a row refused by the gate it is the filter that is
+    // off, not the receiver: the next fix goes in ungated (and says so in the counts).
+    const bool release = gated_in_row_ >= s_.gate_release_count;
+    const Status st = release ? eskf::update(model_, gnss_, belief_, z) : eskf::update(model_, gnss_, belief_, z, gate_);
+    gated_in_row_ = st.outcome == Outcome::gated ? gated_in_row_ + 1 : 0;
+    counts_.gnss_released += release && st.accepted() ? 1 : 0;
+    if (st.accepted()) {
+      ++counts_.gnss_used;
+      pending_used_ = 1;
+    } else if (st.outcome == Outcome::gated) {
+      ++counts_.gnss_gated;
+    } else {
+      ++counts_.gnss_refused;
+    }
+    if (s_.use_gnss_velocity && fix.velocity) {
+      const Eigen::Vector3d v(fix.velocity->y(), fix.velocity->x(), -fix.velocity->z());
+      gnss_velocity_.R = floored(models::ned_from_enu_cov(fix.velocity_cov), s_.gnss_velocity_sigma_floor_mps);
+      gnss_velocity_.gyro = gyro_body_;
+      if (gnss_velocity_.R.allFinite()) count(eskf::update(model_, gnss_velocity_, belief_, v, gate_), counts_.velocity_used, counts_.velocity_gated);
+    }
+  }
+
+  /// Closes the last epoch; call once after the replay.
+  void finish() { close_epoch(); }
+
+  bool aligned() const { return aligned_; }
+  double alignment_time() const { return align_t_; }
+  const PassCounts& counts() const { return counts_; }
+  const StaticStats& static_start() const { return start_; }
+  RtsRecorder<Model>& recorder() { return rts_; }
+  const std::vector<char>& gnss_used_per_epoch() const { return used_; }
+  const Model& model() const { return model_; }
+  const Eigen::Vector3d& gnss_lever() const { return gnss_.lever_arm; }
+
+ private:
+  static Eigen::Matrix3d floored(Eigen::Matrix3d cov, double sigma) {
+    for (int i = 0; i < 3; ++i) cov(i, i) = std::max(cov(i, i), sigma * sigma);
+    return cov;
+  }
+  void open_epoch(double t) {
+    if (open_) return;
+    prior_ = belief_;
+    open_t_ = t;
+    open_ = true;
+  }
+  void close_epoch() {
+    if (!open_) return;
+    open_ = false;
+    if (rts_.record(open_t_, prior_, belief_).accepted()) used_.push_back(pending_used_);
+    pending_used_ = 0;
+  }
+  template <class Meas, int M>
+  Status update(double t, const Meas& meas, const Vector<M>& z) {
+    open_epoch(t);
+    return eskf::update(model_, meas, belief_, z, gate_);
+  }
+  void count(const Status& st, std::size_t& used, std::size_t& gated) {
+    if (st.accepted()) ++used;
+    else if (st.outcome == Outcome::gated) ++gated;
+    else ++counts_.filter_failures;
+  }
+
+  void try_align(const io::GnssFix& fix, const Eigen::Vector3d& z, const Eigen::Matrix3d& cov) {
+    const bool good = fix.quality == io::FixQuality::fixed || fix.quality == io::FixQuality::floating;
+    const auto x = align_.push({fix.t, z, good && cov.allFinite()});
+    if (!x) return;
+    models::NavState nav = *x;
+    // Roll and pitch from the static start's mean specific force (f = -C' g at rest).
+    double roll = 0.0, pitch = 0.0;
+    if (start_.samples > 0) {
+      const Eigen::Vector3d& f = start_.accel_mean;
+      roll = std::atan2(-f(1), -f(2));
+      pitch = std::atan2(f(0), std::hypot(f(1), f(2)));
+    }
+    // Heading: the fix's own velocity direction when it has one (the instant's track; the
+    // displacement over the last second lags a turn by half a second), else the displacement.
+    double yaw = models::heading_of(nav.get<"theta">().toRotationMatrix());
+    if (fix.velocity && fix.velocity->head<2>().norm() > 0.5 * s_.alignment_min_distance_m / s_.alignment_interval_s)
+      yaw = std::atan2(fix.velocity->x(), fix.velocity->y());
+    const Eigen::Quaterniond q = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
+                                 Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX());
+    nav.get<"theta">() = q;
+    // The static mean holds the earth's rate too, which the full mechanisation models.
+    if (start_.samples > 0) nav.get<"bg">() = start_.gyro_mean - q.conjugate() * earth::earth_rate_ned(z(0));
+    if (fix.velocity) nav.get<"v">() = Eigen::Vector3d(fix.velocity->y(), fix.velocity->x(), -fix.velocity->z());
+    nav.get<"p">() = earth::GeodeticRetraction::inject(z, -(q * gnss_.lever_arm));
+    B b;
+    if constexpr (requires { Model::set_base_part(b.nominal, nav); }) {
+      Model::set_base_part(b.nominal, nav);
+      b.nominal.template get<"lever">() = nhc_.vehicle.lever_arm;
+    } else {
+      b.nominal = nav;
+    }
+    using L = typename Model::ErrorLayout;
+    b.cov.setZero();
+    L::template cov<"p">(b.cov) = cov;
+    L::template cov<"v">(b.cov).diagonal().setConstant(s_.initial_velocity_sigma * s_.initial_velocity_sigma);
+    const double rp = s_.initial_roll_pitch_sigma * s_.initial_roll_pitch_sigma;
+    L::template cov<"theta">(b.cov).diagonal() << rp, rp, s_.initial_heading_sigma * s_.initial_heading_sigma;
+    L::template cov<"bg">(b.cov).diagonal().setConstant(s_.initial_gyro_bias_sigma * s_.initial_gyro_bias_sigma);
+    L::template cov<"ba">(b.cov).diagonal().setConstant(s_.initial_accel_bias_sigma * s_.initial_accel_bias_sigma);
+    if constexpr (S::has("mount")) {
+      L::template cov<"mount">(b.cov).diagonal().setConstant(s_.initial_mount_sigma * s_.initial_mount_sigma);
+      L::template cov<"lever">(b.cov).diagonal().setConstant(s_.initial_lever_sigma * s_.initial_lever_sigma);
+    }
+    belief_ = b;
+    rts_.start(fix.t, belief_);
+    used_.assign(1, 1);
+    aligned_ = true;
+    align_t_ = fix.t;
+    next_constraint_t_ = fix.t;
+  }
+
+  const Settings& s_;
+  Constraints c_;
+  std::vector<OutageWindow> windows_;
+  Decimator decimator_;
+  VibrationStaticDetector detector_;
+  ChiSquareGate gate_;
+  Model model_{};
+  models::ImuInput imu_;
+  models::DynamicAlignment align_;
+  models::GnssGeodeticPosition<S> gnss_;
+  models::GnssVelocity<S> gnss_velocity_;
+  models::ZeroVelocity<S> zupt_;
+  models::Heading<S> zihr_;
+  models::NonHolonomic<S> nhc_;
+  models::Heading<S> mag_heading_;
+  models::MagRelativeHeading mag_;
+  B belief_{}, prior_{};
+  RtsRecorder<Model> rts_;
+  std::vector<char> used_;
+  char pending_used_ = 0;
+  bool open_ = false, aligned_ = false;
+  double open_t_ = 0.0, align_t_ = NAN, next_constraint_t_ = 0.0;
+  std::optional<double> held_heading_;
+  Eigen::Vector3d gyro_body_ = Eigen::Vector3d::Zero();
+  StaticAccumulator start_acc_;
+  StaticStats start_{};
+  PassCounts counts_{};
+  std::function<void(double)> progress_;
+  double t_first_ = 0.0, t_span_ = 1.0;
+  int since_progress_ = 0;
+  int gated_in_row_ = 0;
+};
+
+}  // namespace ctxfuse::pipelines::gins
