@@ -108,10 +108,12 @@ struct LabelledSvmRows {
   std::vector<int> labels;  // kNlosLabel / kLosLabel
 };
 
-/// Trains p1's SVM (RBF, Platt probabilities) on a balanced subsample: every NLOS row and as
-/// many LOS rows, both thinned evenly to at most settings.svm_rows_per_class. Throws
+/// Trains an SVM (RBF, Platt probabilities) on `features(input)` (a Dim-vector) of a balanced
+/// subsample: every NLOS row and as many LOS rows, both thinned evenly to at most
+/// settings.svm_rows_per_class; rows whose SvmInput is not finite are skipped. Throws
 /// std::invalid_argument when a class is missing or the rows are unusable.
-inline NlosSvm train_nlos_svm(const LabelledSvmRows& rows, const Settings& s) {
+template <int Dim, class Features>
+classify::SvmModel<Dim, 2> train_balanced_svm(const LabelledSvmRows& rows, const Settings& s, Features features) {
   std::vector<std::size_t> nlos, los;
   for (std::size_t i = 0; i < rows.inputs.size(); ++i)
     if (rows.inputs[i].finite()) (rows.labels[i] == kNlosLabel ? nlos : los).push_back(i);
@@ -119,13 +121,13 @@ inline NlosSvm train_nlos_svm(const LabelledSvmRows& rows, const Settings& s) {
                                                                std::to_string(nlos.size()) + " NLOS and " +
                                                                std::to_string(los.size()) + " LOS rows");
   const std::size_t per_class = std::min({nlos.size(), los.size(), static_cast<std::size_t>(s.svm_rows_per_class)});
-  classify::SvmFeatures<2> x(static_cast<Eigen::Index>(2 * per_class), 2);
+  classify::SvmFeatures<Dim> x(static_cast<Eigen::Index>(2 * per_class), Dim);
   std::vector<int> y;
   y.reserve(2 * per_class);
   auto take = [&](const std::vector<std::size_t>& from, int label) {
     for (std::size_t k = 0; k < per_class; ++k) {
       const std::size_t i = from[k * from.size() / per_class];  // evenly spaced in time
-      x.row(static_cast<Eigen::Index>(y.size())) = rows.inputs[i].vector().transpose();
+      x.row(static_cast<Eigen::Index>(y.size())) = features(rows.inputs[i]).transpose();
       y.push_back(label);
     }
   };
@@ -133,7 +135,12 @@ inline NlosSvm train_nlos_svm(const LabelledSvmRows& rows, const Settings& s) {
   take(los, kLosLabel);
   classify::SvmTrainOptions o;
   o.probability = true;
-  return classify::train_svm<2, 2>(x, y, o);
+  return classify::train_svm<Dim, 2>(x, y, o);
+}
+
+/// Trains p1's SVM on (v_u, v_i) (train_balanced_svm).
+inline NlosSvm train_nlos_svm(const LabelledSvmRows& rows, const Settings& s) {
+  return train_balanced_svm<2>(rows, s, [](const SvmInput& in) { return in.vector(); });
 }
 
 }  // namespace ctxfuse::pipelines::nlos_uwb

@@ -19,6 +19,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/LU>  // determinant()
 
 #include <cmath>
 #include <span>

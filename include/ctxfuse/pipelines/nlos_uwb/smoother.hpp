@@ -18,6 +18,7 @@
 #include <cmath>
 #include <span>
 #include <type_traits>
+#include <utility>
 
 #include "ctxfuse/core/status.hpp"
 #include "ctxfuse/filters/fixed_lag.hpp"
@@ -53,6 +54,7 @@ class RangeSmoother {
     if (const Status s = initial_belief(p, P, settings_, prior); !s.accepted()) return s;
     const Status s = smoother_.initialise(t, prior);
     started_ = s.accepted();
+    fresh_ = started_;
     return s;
   }
 
@@ -67,6 +69,12 @@ class RangeSmoother {
     if (!started_) return Status::invalid(Problem::time_not_set);
     if (static_cast<int>(epoch.size()) > kSlots) return Status::invalid(Problem::measurement_count_above_capacity);
     const double t = epoch.back().t, dt = t - time();
+    // An epoch whose ranges all share the start's time (a simulator, or a system stamping the
+    // epoch once) is the epoch the start's fix was computed from: its ranges are in the prior.
+    if (std::exchange(fresh_, false) && dt == 0.0) {
+      for (std::size_t i = 0; i < epoch.size(); ++i) statuses[i] = Status{};
+      return Status{};
+    }
     if (!(dt > 0.0)) return Status::invalid(dt == 0.0 ? Problem::non_positive_dt : Problem::out_of_order_time);
     SquareMatrix<4> F;
     const Vector<4> x = smoother_.motion().predict(smoother_.newest(), NoInput{}, dt, &F);
@@ -123,6 +131,7 @@ class RangeSmoother {
   Smoother smoother_;
   Gate gate_;
   bool started_ = false;
+  bool fresh_ = false;  // started, no epoch applied yet
 };
 
 }  // namespace ctxfuse::pipelines::nlos_uwb
