@@ -1,0 +1,58 @@
+// The smoother's step time over a 10-minute replay (issue 16: "flat over a 10-minute replay"):
+// tests/factors/uwb_replay.hpp's 6000 epochs (4 ranges, every 7th left out) through the
+// pipeline's fixed-lag smoother (pipelines/nlos_uwb/smoother.hpp: K = 10, gate, 16 slots).
+// One iteration is the whole replay from a fresh start; the counters are the mean step time of
+// each minute (this thread's CPU clock around the minute's 600 steps, summed over iterations:
+// the shared machine's load inflates wall time) and the ratio of the last minute's to the
+// first's. Run with
+//   bench_fixed_lag --benchmark_filter=Replay --benchmark_repetitions=5
+//                   --benchmark_out=replay.json --benchmark_out_format=json
+#include <benchmark/benchmark.h>
+
+#include <array>
+#include <ctime>
+#include <memory>
+#include <string>
+
+#include "uwb_replay.hpp"
+
+namespace {
+using namespace ctxfuse;
+namespace nu = pipelines::nlos_uwb;
+
+double thread_cpu_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+void FixedLag_Replay10min(benchmark::State& state) {
+  const test::UwbReplay replay(10);
+  constexpr int kMinutes = 10;
+  std::array<double, kMinutes> minute_s{};
+  auto s = std::make_unique<nu::RangeSmoother<>>(nu::Settings{});
+  int refused = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    *s = nu::RangeSmoother<>(nu::Settings{});
+    (void)s->start(0.0, replay.start_position(), replay.start_cov());
+    state.ResumeTiming();
+    for (int m = 0; m < kMinutes; ++m) {
+      const double t0 = thread_cpu_s();
+      for (int i = 0; i < test::UwbReplay::epochs_per_minute; ++i)
+        refused += !replay.step(*s, static_cast<std::size_t>(m * test::UwbReplay::epochs_per_minute + i));
+      minute_s[static_cast<std::size_t>(m)] += thread_cpu_s() - t0;
+    }
+    benchmark::DoNotOptimize(s->position().data());
+  }
+  if (refused > 0) state.SkipWithError("a step was refused");
+  const double steps = static_cast<double>(state.iterations()) * test::UwbReplay::epochs_per_minute;
+  for (int m = 0; m < kMinutes; ++m)
+    state.counters["step_us_min" + std::to_string(m + 1)] = 1e6 * minute_s[static_cast<std::size_t>(m)] / steps;
+  state.counters["last_over_first"] = minute_s[kMinutes - 1] / minute_s[0];
+  state.counters["steps_per_replay"] = kMinutes * test::UwbReplay::epochs_per_minute;
+}
+
+BENCHMARK(FixedLag_Replay10min)->Name("FixedLag/Replay10min")->Unit(benchmark::kMillisecond);
+
+}  // namespace
