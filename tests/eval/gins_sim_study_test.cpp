@@ -1,0 +1,62 @@
+// The GNSS/INS study's view of the simulated drive (eval/gins_sim_study.hpp): with an error-free
+// IMU, the converted increments (FLU -> FRD, ENU -> geodetic, the simulator's flat-site gravity
+// re-expressed at the filter's normal gravity) integrated by the filter's own simplified
+// strapdown from the true start follow the converted truth over the whole 9-minute drive. A
+// wrong axis, heading convention or gravity shows as kilometres (a 0.018 m/s^2 gravity error
+// alone gives 2.6 km of height over 540 s). Also the error statistics against their definition.
+#include <gtest/gtest.h>
+
+#include <iostream>
+
+#include "ctxfuse/eval/gins_sim_study.hpp"
+
+namespace {
+using namespace ctxfuse;
+
+TEST(GinsSimStudy, ConvertedErrorFreeImuFollowsTheConvertedTruth) {
+  sim::DriveConfig cfg;
+  cfg.seed = 3;
+  cfg.imu.gyro_noise_density = cfg.imu.gyro_bias_sigma = cfg.imu.gyro_scale_sigma = 0.0;
+  cfg.imu.accel_noise_density = cfg.imu.accel_bias_sigma = cfg.imu.accel_scale_sigma = 0.0;
+  const eval::GinsSimDrive d = eval::gins_sim_drive(sim::simulate_drive(cfg));
+  ASSERT_GT(d.t.size(), 50000u);
+  const eval::GinsSimModel m;
+  models::NavState x = d.truth.front();
+  double max_h = 0.0, max_v = 0.0, max_heading = 0.0;
+  for (std::size_t k = 1; k < d.t.size(); ++k) {
+    const double dt = d.t[k] - d.t[k - 1];
+    models::BodyIncrements inc;
+    inc.dtheta = 0.5 * (d.gyro[k - 1] + d.gyro[k]) * dt;
+    inc.dv = 0.5 * (d.accel[k - 1] + d.accel[k]) * dt;
+    // The simplified strapdown resolves dv at the start of the step; with the rotation over
+    // the step compensated here (1/2 dtheta x dv) only the conversion's errors remain.
+    inc.dv += 0.5 * inc.dtheta.cross(inc.dv);
+    x = m.predict(x, inc, dt, nullptr);
+    const Eigen::Vector3d e = earth::GeodeticRetraction::difference(x.get<"p">(), d.truth[k].get<"p">());
+    max_h = std::max(max_h, e.head<2>().norm());
+    max_v = std::max(max_v, std::abs(e(2)));
+    const double dh = PlanarAngleRetraction::wrap(models::heading_of(x.get<"theta">().toRotationMatrix()) -
+                                                  models::heading_of(d.truth[k].get<"theta">().toRotationMatrix()));
+    max_heading = std::max(max_heading, std::abs(dh));
+  }
+  std::cout << "error-free IMU over " << d.t.back() << " s: max horizontal " << max_h << " m, vertical " << max_v
+            << " m, heading " << max_heading << " rad\n";
+  // Measured (seed 3): 7.7 mm, 39 mm, 1.6e-5 rad. Without the compensation above the
+  // simplified strapdown itself drifts 11.9 m horizontally over the drive's turns.
+  EXPECT_LT(max_h, 0.015);
+  EXPECT_LT(max_v, 0.06);
+  EXPECT_LT(max_heading, 3e-5);
+}
+
+TEST(GinsSimStudy, ErrorStatisticsFollowTheirDefinition) {
+  std::vector<double> e;
+  for (int i = 1; i <= 100; ++i) e.push_back(static_cast<double>(101 - i));  // 100 .. 1, unsorted order
+  const eval::HorizontalErrors h = eval::horizontal_errors(e);
+  EXPECT_EQ(h.n, 100u);
+  EXPECT_EQ(h.p67, 67.0);  // the smallest value with at least 67 % of the samples at or below it
+  EXPECT_EQ(h.p75, 75.0);
+  EXPECT_EQ(h.max, 100.0);
+  EXPECT_NEAR(h.rms, std::sqrt(100.0 * 101.0 * 201.0 / 6.0 / 100.0), 1e-12);
+}
+
+}  // namespace
