@@ -18,6 +18,7 @@
 #include <cmath>
 
 #include "consistency_report.hpp"
+#include "ins_sim.hpp"
 #include "ctxfuse/filters/eskf.hpp"
 #include "ctxfuse/models/ins_nav.hpp"
 #include "ctxfuse/models/ins_updates.hpp"
@@ -45,7 +46,7 @@ Model imu_model(double q_factor) {
 Eigen::Vector3d true_rate(double t) { return {0.05 * std::sin(0.3 * t), 0.04 * std::cos(0.2 * t), 0.15 * std::sin(0.1 * t)}; }
 Eigen::Vector3d true_accel_n(double t) { return {0.6 * std::sin(0.2 * t), 0.5 * std::cos(0.15 * t), 0.1 * std::sin(0.5 * t)}; }
 
-Eigen::Vector3d normal3(sim::Rng& rng) { return reliability::standard_normal<3>(rng); }
+using reliability::normal3;
 
 reliability::Verdict monte_carlo(double q_factor) {
   const Model truth_model = imu_model(1.0);
@@ -68,7 +69,6 @@ reliability::Verdict monte_carlo(double q_factor) {
     State truth = truth_model.inject(b.nominal, draw);  // the first error is N(0, P0)
 
     const double sg = truth_model.gyro_noise_density * std::sqrt(dt), sa = truth_model.accel_noise_density * std::sqrt(dt);
-    const double sbg = std::sqrt(truth_model.gyro_bias.variance(dt)), sba = std::sqrt(truth_model.accel_bias.variance(dt));
     models::BodyIncrements clean_prev, measured_prev;
     for (int k = 0; k < seconds * imu_per_fix; ++k) {
       const double t = k * dt;
@@ -80,16 +80,10 @@ reliability::Verdict monte_carlo(double q_factor) {
       models::BodyIncrements measured = clean;
       measured.dtheta += sg * normal3(rng);
       measured.dv += sa * normal3(rng);
-      clean.has_previous = measured.has_previous = k > 0;
-      clean.prev_dtheta = clean_prev.dtheta;
-      clean.prev_dv = clean_prev.dv;
-      measured.prev_dtheta = measured_prev.dtheta;
-      measured.prev_dv = measured_prev.dv;
-      clean_prev = clean;
-      measured_prev = measured;
+      reliability::chain(clean, clean_prev, k == 0);
+      reliability::chain(measured, measured_prev, k == 0);
       truth = truth_model.predict(truth, clean, dt, nullptr);
-      truth.get<"bg">() += sbg * normal3(rng);
-      truth.get<"ba">() += sba * normal3(rng);
+      reliability::walk_biases(truth_model, truth, dt, rng);
       EXPECT_TRUE(eskf::predict(filter_model, b, measured, dt).accepted());
 
       if ((k + 1) % imu_per_fix != 0) continue;

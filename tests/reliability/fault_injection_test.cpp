@@ -264,7 +264,8 @@ void check_fault(Pipeline p, const Fault& f, const ri::Settings& s = defaults())
       case FaultKind::inf_value:
         if (f.stream == StreamId::imu) {
           EXPECT_EQ(out.track.rejected_imu - base.track.rejected_imu, n);
-          std::snprintf(buf, sizeof buf, "%zu IMU samples refused (Track::rejected_imu)", out.track.rejected_imu - base.track.rejected_imu);
+          std::snprintf(buf, sizeof buf, "%zu IMU samples refused, the previous one held (Track::rejected_imu)",
+                        out.track.rejected_imu - base.track.rejected_imu);
           evidence = buf;
         } else if (f.stream == StreamId::speed && !s.use_speed) {
           // With the default settings the speed's value is not read (the samples time the
@@ -275,6 +276,12 @@ void check_fault(Pipeline p, const Fault& f, const ri::Settings& s = defaults())
           const ri::Track& dropped = dropout_track(p, f, s);
           EXPECT_TRUE(out.track.t.size() == dropped.t.size() && same_track(out.track, dropped));
           evidence = "refused: track identical to the dropout's";
+          if (f.stream == StreamId::speed) {  // the speed update's refusals are counted
+            EXPECT_EQ(out.track.rejected_speed - base.track.rejected_speed, n);
+            std::snprintf(buf, sizeof buf, "%zu refused (Track::rejected_speed): track identical to the dropout's",
+                          out.track.rejected_speed - base.track.rejected_speed);
+            evidence = buf;
+          }
         }
         break;
       case FaultKind::nan_stamp:

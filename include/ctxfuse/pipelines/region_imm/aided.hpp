@@ -7,7 +7,8 @@
 //
 // A Core provides, for its kTakers takers (filters that take measurements and keep their own
 // health; kWhole adds the health of the estimator as a whole, the IMM's):
-//   start(t0, b0), predict(u, dt) -> Status, speed(v), reanchor(fault),
+//   start(t0, b0), predict(u, dt) -> Status, speed(v) -> bool (some taker accepted it, or
+//   there was nothing to apply), reanchor(fault),
 //   integrity_view() -> the belief the integrity check compares with,
 //   takes_gnss(), takes_uwb(), watches_uwb() (whether a range feeds the integrity check),
 //   gnss(fix), uwb(range) -> Takes (per taker: the update's status, or nothing if not offered),
@@ -42,8 +43,12 @@ struct Track {
   // Times the UWB integrity check re-anchored the filter (Settings::uwb_integrity; IMU-driven
   // filters that take UWB only).
   int integrity_faults = 0;
-  // IMU samples the filter refused (non-finite or absurd input): dead reckoning skipped them.
+  // IMU propagations whose sample the filter refused (non-finite or absurd rates): each was
+  // propagated with the last accepted sample instead (Aided::predict says why).
   std::size_t rejected_imu = 0;
+  // Speed samples whose vehicle constraint no taker accepted: a non-finite speed under the
+  // speed update (refused), or a constraint every taker gated.
+  std::size_t rejected_speed = 0;
 
   void record(double t_epoch, const Eigen::Vector2d& p, int mode = -1, bool has_solution = true) {
     t.push_back(t_epoch);
@@ -97,10 +102,21 @@ class Aided {
         for (auto& h : health_) h.recovered();
         if (whole_) whole_->recovered();
       }
-    if (!core_.predict(u, dt).accepted()) ++track_.rejected_imu;
+    if (core_.predict(u, dt).accepted()) {
+      last_input_ = u;
+      return;
+    }
+    // A refused sample is replaced by the last accepted one, as its dropout would be: the
+    // replay holds each sample over the interval after its stamp, so a dropped sample's
+    // interval is covered by the previous sample. Skipping the interval instead would lose the
+    // motion over it (v dt a step: 12 m after 5 s of NaN samples at 2.5 m/s).
+    ++track_.rejected_imu;
+    if (last_input_) (void)core_.predict(*last_input_, dt);
   }
 
-  void speed(const io::SpeedSample& v) { core_.speed(v); }
+  void speed(const io::SpeedSample& v) {
+    if (!core_.speed(v)) ++track_.rejected_speed;
+  }
 
   void uwb(const io::UwbRange& r) {
     if (!core_.takes_uwb()) return;
@@ -172,6 +188,7 @@ class Aided {
   std::optional<FilterHealth> whole_ = Core::kWhole ? std::optional<FilterHealth>(FilterHealth(s_)) : std::nullopt;
   UwbIntegrity integrity_;
   std::optional<io::GnssFix> last_fix_;
+  std::optional<models::PlanarImu> last_input_;  // the last IMU input the filter accepted
   Track track_;
 };
 

@@ -35,15 +35,22 @@ struct UwbTag {};
 struct SpeedTag {};
 
 namespace detail {
+inline bool accepted(const Status& s) { return s.accepted(); }
+template <int R>
+bool accepted(const imm::UpdateResult<R>& r) {
+  return r.any_accepted();
+}
+
 // The vehicle constraint at each speed-sample time, with every taker's share of its noise.
-// Its outcome is not tracked: the constraint is no sensor whose health could fail, and a
-// refused constraint leaves the belief as it was.
+// True when the taker accepted it or there was nothing to apply; a refused constraint (a
+// non-finite speed under the speed update) or a gated one leaves the belief as it was, and
+// Aided counts it (Track::rejected_speed). The constraint feeds no health count: it is no
+// sensor whose lock-out a recovery could mend.
 template <class UpdateFn>
-void apply_constraint(const Settings& s, const io::SpeedSample& v, double share, UpdateFn&& update) {
-  if (s.use_speed)
-    (void)update(speed_meas(s, share), Vector<2>(v.speed_mps, 0.0));
-  else if (s.use_nhc)
-    (void)update(nhc_meas(s, share), Vector<1>(0.0));
+bool apply_constraint(const Settings& s, const io::SpeedSample& v, double share, UpdateFn&& update) {
+  if (s.use_speed) return accepted(update(speed_meas(s, share), Vector<2>(v.speed_mps, 0.0)));
+  if (s.use_nhc) return accepted(update(nhc_meas(s, share), Vector<1>(0.0)));
+  return true;
 }
 }  // namespace detail
 
@@ -61,8 +68,8 @@ struct SingleCore {
     f.emplace(process_model(*s, process_factor), b0, FilterOptions{}, ChiSquareGate(s->gate_probability));
   }
   Status predict(const models::PlanarImu& u, double dt) { return f->predict(u, dt); }
-  void speed(const io::SpeedSample& v) {
-    detail::apply_constraint(*s, v, 1.0, [&](const auto& m, const auto& z) { return f->update(m, z); });
+  bool speed(const io::SpeedSample& v) {
+    return detail::apply_constraint(*s, v, 1.0, [&](const auto& m, const auto& z) { return f->update(m, z); });
   }
   const Gaussian<L::size>& integrity_view() const { return f->belief(); }
   void reanchor(const UwbIntegrity::Fault& fault) {
@@ -107,10 +114,13 @@ struct FederatedCore {
     f.emplace(process_model_, b0, beta, FilterOptions{}, ChiSquareGate(s->gate_probability));
   }
   Status predict(const models::PlanarImu& u, double dt) { return f->predict(u, dt); }
-  void speed(const io::SpeedSample& v) {
+  bool speed(const io::SpeedSample& v) {  // accepted by either local filter
+    bool any = false;
     for (int i = 0; i < 2; ++i)
-      detail::apply_constraint(*s, v, 1.0 / beta[static_cast<std::size_t>(i)],
-                               [&](const auto& m, const auto& z) { return f->update(i, m, z); });
+      any = detail::apply_constraint(*s, v, 1.0 / beta[static_cast<std::size_t>(i)],
+                                     [&](const auto& m, const auto& z) { return f->update(i, m, z); }) ||
+            any;
+    return any;
   }
   const Gaussian<L::size>& integrity_view() const { return f->local(1); }
   void reanchor(const UwbIntegrity::Fault& fault) {
@@ -198,8 +208,9 @@ struct ImmCore {
     open_cycle(t0);
   }
   Status predict(const models::PlanarImu& u, double dt) { return f->predict(u, dt); }
-  void speed(const io::SpeedSample& v) {
-    detail::apply_constraint(*s, v, 1.0, [&](const auto& m, const auto& z) { return f->update(SpeedTag{}, m, z); });
+  bool speed(const io::SpeedSample& v) {
+    return detail::apply_constraint(*s, v, 1.0,
+                                    [&](const auto& m, const auto& z) { return f->update(SpeedTag{}, m, z); });
   }
   const Gaussian<L::size>& integrity_view() {
     view = f->combined();

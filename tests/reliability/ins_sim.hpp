@@ -1,0 +1,36 @@
+// What the simulated truths of the geodetic INS in tests/reliability share (the GNSS/INS
+// consistency test and the soak): chaining increments for coning and sculling, and moving the
+// truth's biases by the model's own Gauss-Markov processes.
+#pragma once
+
+#include <cmath>
+
+#include "ctxfuse/models/ins_nav.hpp"
+#include "ctxfuse/sim/random.hpp"
+
+namespace ctxfuse::reliability {
+
+inline Eigen::Vector3d normal3(sim::Rng& rng) {
+  Eigen::Vector3d v;
+  for (int i = 0; i < 3; ++i) v(i) = rng.normal();  // in index order (see standard_normal)
+  return v;
+}
+
+/// Gives u the previous step's increments (none on the first step) and remembers u as the next
+/// step's previous.
+inline void chain(models::BodyIncrements& u, models::BodyIncrements& prev, bool first) {
+  u.has_previous = !first;
+  u.prev_dtheta = prev.dtheta;
+  u.prev_dv = prev.dv;
+  prev = u;
+}
+
+/// The truth's biases after a step of dt: the decay is in the model's predict, the driving
+/// noise (the model's Q of the bias blocks) is added here.
+template <class Model, class State>
+void walk_biases(const Model& m, State& x, double dt, sim::Rng& rng) {
+  x.template get<"bg">() += std::sqrt(m.gyro_bias.variance(dt)) * normal3(rng);
+  x.template get<"ba">() += std::sqrt(m.accel_bias.variance(dt)) * normal3(rng);
+}
+
+}  // namespace ctxfuse::reliability
