@@ -7,8 +7,7 @@
 #include <cmath>
 #include <vector>
 
-#include "ctxfuse/eval/outage_protocol.hpp"
-#include "ctxfuse/pipelines/gins/run.hpp"
+#include "ctxfuse/eval/gins_outages.hpp"
 #include "drive_sim.hpp"
 
 namespace {
@@ -42,11 +41,17 @@ const SimRecording& recording() {
       io::GnssFix f;
       f.t = kT0 + st.t;
       f.frame = io::PositionFrame::geodetic;
-      const Eigen::Vector3d noisy = earth::GeodeticRetraction::inject(llh, 0.02 * Eigen::Vector3d(rng.normal(), rng.normal(), rng.normal()));
+      // Draws in index order (an argument list's order of evaluation differs between compilers).
+      auto draw3 = [&] {
+        Eigen::Vector3d n;
+        for (int i = 0; i < 3; ++i) n(i) = rng.normal();
+        return n;
+      };
+      const Eigen::Vector3d noisy = earth::GeodeticRetraction::inject(llh, 0.02 * draw3());
       f.position = {noisy(0) / kDeg, noisy(1) / kDeg, noisy(2)};
       f.cov = Eigen::Matrix3d::Identity() * 0.02 * 0.02;
       const Eigen::Vector3d v = st.truth.get<"v">();
-      f.velocity = Eigen::Vector3d(v(1), v(0), -v(2)) + 0.02 * Eigen::Vector3d(rng.normal(), rng.normal(), rng.normal());
+      f.velocity = Eigen::Vector3d(v(1), v(0), -v(2)) + 0.02 * draw3();
       f.velocity_cov = Eigen::Matrix3d::Identity() * 0.02 * 0.02;
       f.quality = io::FixQuality::fixed;
       s.fixes.push_back(f);
@@ -65,14 +70,8 @@ gins::RunResult run(gins::Constraints c, bool smooth) {
   return gins::run<gins::Nav20>(recording().imu, recording().fixes, gins::Settings{}, o);
 }
 
-std::vector<eval::TimedLatLon> lat_lon(const std::vector<gins::TrajectoryRow>& rows) {
-  std::vector<eval::TimedLatLon> v;
-  for (const auto& r : rows) v.push_back({r.t, r.llh(0), r.llh(1)});
-  return v;
-}
-
 eval::OutageErrors errors(const gins::RunResult& r, const std::vector<gins::TrajectoryRow>& rows) {
-  return eval::outage_errors(lat_lon(rows), recording().truth, r.windows);
+  return eval::outage_errors(eval::lat_lon_of(rows), recording().truth, r.windows);
 }
 
 TEST(GinsPipeline, RowsAtEveryFixAndTheOutageWithheld) {
