@@ -170,6 +170,12 @@ TEST(CliDemo, SummaryJsonAndSectionsNotBuilt) {
     in_json += json.find(std::string("\"") + key + "\"") != std::string::npos ? 1 : 0;
   for (auto pos = r.out.find(": not built\n"); pos != std::string::npos; pos = r.out.find(": not built\n", pos + 1)) ++not_built;
   EXPECT_EQ(in_json + not_built, 5) << r.out;
+  // Paper C's sections: the protocol's tables beside the paper's and the indicative timing.
+  for (const char* key : {"\"nlos_share\"", "\"identification\"", "\"svm_vu\"", "\"graph_paper_rule\"", "\"imu_only\"",
+                          "\"cdf_east_m\"", "\"total_paper\"", "\"indicative\""})
+    EXPECT_NE(json.find(key), std::string::npos) << key;
+  EXPECT_NE(r.out.find("SVM (v_u, v_i)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("0.899/1.873/0.872 (proposed)"), std::string::npos) << r.out;
   EXPECT_EQ(run("demo --seed -3").code, 2);
 }
 
