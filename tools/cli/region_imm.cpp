@@ -20,7 +20,7 @@ void run_section(const DemoContext& ctx, Json& json, std::ostream& out) {
   const auto seed = test.config.seed;
   const io::SensorLog log = sim::sensor_log(test);
   const eval::TruthLog truth = sim::truth_log(test);
-  const ri::Recogniser rec = eval::train_recogniser_for(test.config);
+  const ri::Recogniser rec = train_region_recogniser(test.config);
   const std::string note = "trained on seeds " + std::to_string(seed + Drives::train_seed_offset) + "-" +
                            std::to_string(seed + Drives::train_seed_offset + Drives::train_drives - 1) + ", validated on seed " +
                            std::to_string(seed + Drives::validate_seed_offset);

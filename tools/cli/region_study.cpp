@@ -22,6 +22,7 @@
 
 #include "cli/json.hpp"
 #include "cli/options.hpp"
+#include "cli/region_imm_report.hpp"
 #include "cli/registry.hpp"
 #include "cli/region_study_zones.hpp"
 #include "cli/scenario_flag.hpp"
@@ -53,7 +54,7 @@ SeedResult study_seed(const sim::DriveConfig& cfg, const ri::Settings& s, std::o
   const io::SensorLog log = sim::sensor_log(test);
   const auto features = ri::gnss_features(log.sat_epochs);
   const auto labels = eval::region_labels(test.truth, features.t);
-  const ri::Recognition r = ri::recognise(eval::train_recogniser_for(cfg), features);
+  const ri::Recognition r = ri::recognise(train_region_recogniser(cfg), features);
   const auto regions = ri::region_track(features, r.joint);
   const auto true_regions = ri::region_track(features, labels);
   std::map<std::pair<double, int>, bool> nlos;
@@ -87,7 +88,7 @@ SeedResult study_seed(const sim::DriveConfig& cfg, const ri::Settings& s, std::o
   SeedResult res;
   res.seed = cfg.seed;
   auto score = [&](const ri::Track& tr) { return eval::region_errors(tr, test.truth); };
-  auto score_run = [&](ri::Estimator e, const ri::RunOptions& o = {}) { return score(ri::run(log, e, s, o).track); };
+  auto score_run = [&](ri::Estimator e, const ri::RunOptions& o = {}) { return score(run_region_pipeline(log, e, s, o).track); };
   ri::RunOptions with_true_regions;
   with_true_regions.regions = &true_regions;
   res.fkf = score(t_fkf);

@@ -59,7 +59,7 @@ int run(const std::shared_ptr<void>& opts, const RunInput& in, RunOutput& out, s
     } else {
       std::vector<ri::LabelledFeatures> train;
       for (const auto& dir : o.train) train.push_back(labelled(dir));
-      rec = ri::train_recogniser(std::span<const ri::LabelledFeatures>(train), labelled(o.validate));
+      rec = train_region_recogniser(std::span<const ri::LabelledFeatures>(train), labelled(o.validate));
       note = "trained on " + std::to_string(train.size()) + " logs, validated on " + o.validate;
     }
     if (!o.save_recogniser.empty()) ri::save_recogniser(o.save_recogniser, rec);
