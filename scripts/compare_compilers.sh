@@ -10,13 +10,16 @@
 # scripts/v3_smoke.sh instead, which does not build the tool.)
 #   scripts/compare_compilers.sh [--v3] [seed ...]      (default seeds: 1 2)
 # Needs build/release and build/clang (the tool and bench_imm_steps), and build/release-v3's
-# tool for --v3.
+# tool for --v3. CTXFUSE_CLANG_TOOL_PRESET=clang-asan takes clang's demo from the sanitized
+# build instead (CI does: it builds that tool anyway, and its demo prints the same numbers;
+# bench_imm_steps still comes from build/clang, clang's -O3).
 set -uo pipefail
 
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 out="$repo/build/compare-compilers"
 mkdir -p "$out"
-presets=(release clang)
+clang_tool="${CTXFUSE_CLANG_TOOL_PRESET:-clang}"
+presets=(release "$clang_tool")
 if [[ "${1:-}" == --v3 ]]; then
   presets+=(release-v3)
   shift
@@ -36,8 +39,8 @@ for seed in "${seeds[@]}"; do
       status=1
     fi
   done
-  echo "== seed $seed: g++ vs clang"
-  python3 "$repo/scripts/compare_compilers.py" "$out/release-$seed.json" "$out/clang-$seed.json" || status=1
+  echo "== seed $seed: g++ vs clang ($clang_tool)"
+  python3 "$repo/scripts/compare_compilers.py" "$out/release-$seed.json" "$out/$clang_tool-$seed.json" || status=1
   if [[ " ${presets[*]} " == *" release-v3 "* ]]; then
     echo "== seed $seed: g++ x86-64 vs g++ x86-64-v3 (relative 1e-9)"
     python3 "$repo/scripts/compare_compilers.py" --rel-tol 1e-9 "$out/release-$seed.json" "$out/release-v3-$seed.json" || status=1
