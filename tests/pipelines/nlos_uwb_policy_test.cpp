@@ -188,6 +188,12 @@ TEST(NlosUwbEstimator, SmootherRefusesAnEpochAtItsOwnTimeUnchanged) {
   std::array<bool, 1> attach{true};
   std::array<ctxfuse::Status, 1> st{};
   const auto x = sm.smoother().newest();
+  // The first epoch at the start's own time is the one the start's fix came from (a system
+  // that stamps an epoch once): its ranges are in the prior, nothing is added.
+  EXPECT_TRUE(sm.apply_epoch(epoch, attach, st).accepted());
+  EXPECT_EQ(sm.smoother().newest(), x);
+  EXPECT_EQ(sm.smoother().window().size, 1);
+  // Another epoch at that time is refused, unchanged.
   EXPECT_EQ(sm.apply_epoch(epoch, attach, st).outcome, ctxfuse::Outcome::invalid_input);
   EXPECT_EQ(sm.smoother().newest(), x);
   // A gross range at a later time: gated before the solve; the step itself is accepted.
