@@ -1,0 +1,98 @@
+// `ctxfuse run gins`: usage errors name the problem (exit 2), a folder without the recording's
+// files is a runtime error (exit 1); on the real drive (skipped without it) the trajectory CSV,
+// scored again here with the outage protocol, gives the JSON's figure.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "ctxfuse/eval/gins_outages.hpp"
+#include "support/data_dir.hpp"
+#include "support/run_cli.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+ctxfuse::test::CliRun run(const std::string& args) { return ctxfuse::test::run_cli(args, ctxfuse::test::Stderr::separate); }
+
+const char* kDrive = " --imu-rpy 180,-6.79,185.35 --imu-lever 0,0,-0.65 --gnss-lever 0,-0.05,-0.65 --imu-delay -0.125";
+
+TEST(CliRunGins, UsageErrorsNameTheProblem) {
+  const fs::path empty = fs::temp_directory_path() / ("ctxfuse_run_gins_empty_" + std::to_string(::getpid()));
+  fs::create_directories(empty);
+  const std::string data = " --data \"" + empty.string() + "\"";
+  struct Case {
+    std::string args, says;
+  };
+  const std::vector<Case> cases{
+      {"--outage 15:45", "LEN:PERIOD:START"},
+      {"--outage 15:45:x", "'x'"},
+      {"--outage 0:45:40", "length"},
+      {"--outage 15:10:40", "period"},
+      {"--constraints zupt,foo", "unknown constraint 'foo'"},
+      {"--constraints ''", "--constraints"},
+      {"--imu-rpy 1,2", "--imu-rpy"},
+      {"--gnss-lever 0,0,nan", "finite"},
+      {"--gnss-rate -1", "--gnss-rate"},
+      {"--imu-delay abc", "--imu-delay"},
+      {"--plane", "unknown option '--plane'"},
+  };
+  for (const auto& c : cases) {
+    const auto r = run("run gins" + data + " " + c.args);
+    EXPECT_EQ(r.code, 2) << c.args << ": " << r.err;
+    EXPECT_NE(r.err.find(c.says), std::string::npos) << c.args << ": " << r.err;
+  }
+  const auto no_files = run("run gins" + data);
+  EXPECT_EQ(no_files.code, 1);
+  EXPECT_NE(no_files.err.find("expected one *.pos file, found 0"), std::string::npos) << no_files.err;
+  fs::remove_all(empty);
+}
+
+TEST(CliRunGins, OutagesOnTheRealDriveCsvAndJsonAgree) {
+  CTXFUSE_REQUIRE_DATA(dir, "gnss-imu-drive");
+  const fs::path tmp = fs::temp_directory_path() / ("ctxfuse_run_gins_" + std::to_string(::getpid()));
+  fs::create_directories(tmp);
+  const auto r = run("run gins --data \"" + dir.string() + "\"" + kDrive +
+                     " --outage 15:45:40 --gnss-rate 1 --constraints zupt,nhc --smooth --out \"" + (tmp / "traj.csv").string() +
+                     "\" --json \"" + (tmp / "m.json").string() + "\"");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("smoothed"), std::string::npos) << r.out;
+  std::ifstream js(tmp / "m.json");
+  const nlohmann::json doc = nlohmann::json::parse(js);
+  EXPECT_EQ(doc.at("outages_scored").get<int>(), 10);
+  EXPECT_EQ(doc.at("forward").at("outages").size(), 11u);
+  const double fwd = doc.at("forward").at("rms_m"), smoothed = doc.at("smoothed").at("rms_m");
+  EXPECT_NEAR(fwd, 2.397, 0.05);
+  EXPECT_NEAR(smoothed, 0.263, 0.005);
+  EXPECT_EQ(doc.at("static_start").at("samples").get<int>(), 3061);
+
+  // The CSV (the smoothed trajectory) read back and scored again.
+  std::ifstream csv(tmp / "traj.csv");
+  std::string line;
+  ASSERT_TRUE(std::getline(csv, line));
+  EXPECT_EQ(line.rfind("gps_s,lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg,", 0), 0u) << line;
+  std::vector<ctxfuse::eval::TimedLatLon> traj;
+  constexpr double deg = 3.14159265358979323846 / 180.0;
+  while (std::getline(csv, line)) {
+    std::stringstream ss(line);
+    std::string f[3];
+    for (auto& s : f) std::getline(ss, s, ',');
+    traj.push_back({std::stod(f[0]), std::stod(f[1]) * deg, std::stod(f[2]) * deg});
+  }
+  EXPECT_EQ(static_cast<double>(traj.size()), doc.at("epochs").get<double>());
+  const auto rec_fixes = ctxfuse::io::to_gnss_fixes(ctxfuse::io::read_rtklib_pos(dir / "gnss_1934_sf.pos"));
+  std::vector<ctxfuse::pipelines::gins::OutageWindow> windows;
+  for (const auto& w : doc.at("forward").at("outages")) windows.push_back({w.at("start").get<double>(), w.at("end").get<double>()});
+  const auto again = ctxfuse::eval::outage_errors(traj, ctxfuse::eval::rtk_fixed_reference(rec_fixes), windows);
+  // Stamps to the ms (the fixes' own resolution) and 1e-10 deg (1e-5 m): the same figure.
+  EXPECT_NEAR(again.rms, smoothed, 1e-4);
+  fs::remove_all(tmp);
+}
+
+}  // namespace

@@ -1,0 +1,249 @@
+// `ctxfuse run gins --data DIR`: the GNSS/INS error-state pipeline (ctxfuse/pipelines/gins) on
+// one recording folder (one RTKLIB *.pos, one imu*.csv with its .tag), with simulated outages,
+// GNSS decimation, a constraint set, the installation and RTS smoothing as options; scored with
+// the outage protocol (ctxfuse/eval/gins_outages.hpp) against the folder's own RTK-fixed epochs
+// when there are outages. --out writes the trajectory (the smoothed one with --smooth):
+//   gps_s,lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg,
+//   sd_n,sd_e,sd_d,sd_vn,sd_ve,sd_vd,sd_roll_deg,sd_pitch_deg,sd_yaw_deg,gnss_used
+// (GPST seconds on RTKLIB's 1970-based scale; the GNSS antenna's position; velocity NED [m/s];
+// 1-sigma N/E/D [m], [m/s], attitude error [deg]). Parsing and formatting only.
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <ostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cli/formatted.hpp"
+#include "cli/json.hpp"
+#include "cli/options.hpp"
+#include "cli/progress.hpp"
+#include "cli/run_registry.hpp"
+#include "ctxfuse/eval/gins_outages.hpp"
+
+namespace ctxfuse::cli {
+namespace {
+
+namespace gins = ctxfuse::pipelines::gins;
+
+struct GinsOptions {
+  std::string outage, constraints = "none";
+  double gnss_rate = 0.0, imu_delay = 0.0;
+  bool smooth = false;
+  std::vector<double> imu_rpy{0.0, 0.0, 0.0}, imu_lever{0.0, 0.0, 0.0}, gnss_lever{0.0, 0.0, 0.0};
+};
+
+// "LEN:PERIOD:START" -> schedule; an empty string when it parses, the problem otherwise.
+std::string parse_outage(const std::string& s, gins::OutageSchedule* out) {
+  double v[3];
+  std::size_t pos = 0;
+  for (int i = 0; i < 3; ++i) {
+    const std::size_t end = i < 2 ? s.find(':', pos) : s.size();
+    if (end == std::string::npos) return "'" + s + "' is not LEN:PERIOD:START (three numbers separated by ':')";
+    const std::string part = s.substr(pos, end - pos);
+    std::size_t used = 0;
+    try {
+      v[i] = std::stod(part, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (part.empty() || used != part.size() || !std::isfinite(v[i]))
+      return "'" + part + "' in '" + s + "' is not a number (LEN:PERIOD:START, seconds)";
+    pos = end + 1;
+  }
+  if (!(v[0] > 0.0)) return "outage length " + std::to_string(v[0]) + " s must be positive";
+  if (!(v[1] >= v[0])) return "outage period must be at least the length (" + s + ")";
+  if (!(v[2] >= 0.0)) return "outage start must be >= 0 s after the first GNSS epoch (" + s + ")";
+  if (out) *out = {v[0], v[1], v[2], eval::standard_outages().end_margin};
+  return {};
+}
+
+std::string parse_constraints(const std::string& s, gins::Constraints* out) {
+  gins::Constraints c;
+  if (s == "none") {
+    if (out) *out = c;
+    return {};
+  }
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    if (item == "zupt") c.zupt = true;
+    else if (item == "zihr") c.zihr = true;
+    else if (item == "nhc") c.nhc = true;
+    else if (item == "mag") c.mag = true;
+    else return "unknown constraint '" + item + "' (any of zupt,zihr,nhc,mag, or none)";
+  }
+  if (!c.any()) return "empty constraint list (any of zupt,zihr,nhc,mag, or none)";
+  if (out) *out = c;
+  return {};
+}
+
+const CLI::Validator kFinite([](std::string& s) {
+  std::size_t used = 0;
+  double v = NAN;
+  try { v = std::stod(s, &used); } catch (const std::exception&) { used = 0; }
+  return used == s.size() && std::isfinite(v) ? std::string() : "'" + s + "' is not a finite number";
+}, "", "finite");
+
+std::shared_ptr<void> add_options(CLI::App& app) {
+  auto o = std::make_shared<GinsOptions>();
+  app.add_option("--outage", o->outage, "simulated GNSS outages LEN:PERIOD:START [s] (START after the first GNSS epoch; windows end "
+                                        "30 s before the last); scored against the RTK-fixed epochs")
+      ->check(CLI::Validator([](std::string& s) { return parse_outage(s, nullptr); }, "LEN:PERIOD:START", "outage"));
+  app.add_option("--gnss-rate", o->gnss_rate, "decimate GNSS to HZ (default: every fix)")->check(CLI::PositiveNumber);
+  app.add_option("--constraints", o->constraints, "any of zupt,zihr,nhc,mag, or none")
+      ->check(CLI::Validator([](std::string& s) { return parse_constraints(s, nullptr); }, "LIST", "constraints"));
+  app.add_flag("--smooth", o->smooth, "RTS-smooth the forward pass (the CSV is then the smoothed trajectory)");
+  app.add_option("--imu-rpy", o->imu_rpy, "IMU axes -> body (forward, right, down): roll,pitch,yaw [deg]")
+      ->delimiter(',')->expected(3)->check(kFinite);
+  app.add_option("--imu-lever", o->imu_lever, "IMU from the system origin: forward,right,down [m]")->delimiter(',')->expected(3)->check(kFinite);
+  app.add_option("--gnss-lever", o->gnss_lever, "GNSS antenna from the system origin: forward,right,down [m]")
+      ->delimiter(',')->expected(3)->check(kFinite);
+  app.add_option("--imu-delay", o->imu_delay, "logging delay added to IMU time [s]")->check(CLI::Range(-10.0, 10.0));
+  return o;
+}
+
+Json scores_json(const eval::OutageErrors& e) {
+  Json j;
+  j["rms_m"] = e.rms;
+  j["max_m"] = e.max;
+  j["epochs"] = e.epochs;
+  j["unscored_epochs"] = e.unscored;
+  Json per = Json::array();
+  for (const auto& o : e.outages) {
+    Json w;
+    w["start"] = o.window.start;
+    w["end"] = o.window.end;
+    w["epochs"] = o.epochs;
+    w["rms_m"] = o.rms;
+    w["max_m"] = o.max;
+    per.push_back(std::move(w));
+  }
+  j["outages"] = std::move(per);
+  return j;
+}
+
+bool write_csv(const std::string& path, const std::vector<gins::TrajectoryRow>& rows, std::ostream& err) {
+  std::ofstream os(path);
+  os << "gps_s,lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg,sd_n,sd_e,sd_d,sd_vn,sd_ve,sd_vd,"
+        "sd_roll_deg,sd_pitch_deg,sd_yaw_deg,gnss_used\n";
+  const double d = 1.0 / gins::kDeg;
+  char buf[512];
+  for (const auto& r : rows) {
+    std::snprintf(buf, sizeof buf,
+                  "%.3f,%.10f,%.10f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d\n", r.t,
+                  r.llh(0) * d, r.llh(1) * d, r.llh(2), r.velocity_ned(0), r.velocity_ned(1), r.velocity_ned(2), r.rpy(0) * d,
+                  r.rpy(1) * d, r.rpy(2) * d, r.sd_position(0), r.sd_position(1), r.sd_position(2), r.sd_velocity(0),
+                  r.sd_velocity(1), r.sd_velocity(2), r.sd_attitude(0) * d, r.sd_attitude(1) * d, r.sd_attitude(2) * d,
+                  r.gnss_used ? 1 : 0);
+    os << buf;
+  }
+  if (!os.flush()) {
+    err << "ctxfuse run gins: cannot write " << path << '\n';
+    return false;
+  }
+  return true;
+}
+
+int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::ostream& err) {
+  const auto& o = *static_cast<const GinsOptions*>(opts.get());
+  gins::RunOptions ro;
+  if (!o.outage.empty()) parse_outage(o.outage, &ro.outages);
+  parse_constraints(o.constraints, &ro.constraints);
+  ro.gnss_rate_hz = o.gnss_rate;
+  ro.smooth = o.smooth;
+  ro.installation.imu_rpy_deg = Eigen::Vector3d(o.imu_rpy[0], o.imu_rpy[1], o.imu_rpy[2]);
+  ro.installation.imu_lever_m = Eigen::Vector3d(o.imu_lever[0], o.imu_lever[1], o.imu_lever[2]);
+  ro.installation.gnss_lever_m = Eigen::Vector3d(o.gnss_lever[0], o.gnss_lever[1], o.gnss_lever[2]);
+  ro.installation.imu_delay_s = o.imu_delay;
+  const gins::Settings settings;
+  gins::Recording rec;
+  gins::RunResult res;
+  {
+    Progress progress(err, "ctxfuse run gins", 1.0);
+    ro.progress = [&](double f) { progress.update(f); };
+    try {
+      rec = gins::read_recording(in.data_dir);
+      res = gins::run<gins::Nav20>(rec.imu, rec.fixes, settings, ro);
+    } catch (const std::exception& e) {
+      err << "ctxfuse run gins: " << e.what() << '\n';
+      return 1;
+    }
+  }
+  if (!res.aligned) {
+    err << "ctxfuse run gins: no dynamic alignment (no two used fixes 1 s and "
+        << settings.alignment_min_distance_m << " m apart): no trajectory\n";
+    return 1;
+  }
+  const auto& c = res.counts;
+  const auto& ss = res.static_start;
+  std::ostream& out = in.out;
+  const double t0 = rec.fixes.empty() ? 0.0 : rec.fixes.front().t;
+  out << formatted("gins on %s: %zu IMU samples (%.2f Hz), %zu fixes; aligned %.2f s after the first fix\n", in.data_dir.string().c_str(),
+                   rec.imu.size(), res.imu_rate_hz, rec.fixes.size(), res.alignment_time - t0);
+  out << formatted("  GNSS used %zu, withheld %zu, decimated %zu, gated %zu (released %zu); velocity %zu (gated %zu)\n", c.gnss_used,
+                   c.gnss_withheld, c.gnss_decimated, c.gnss_gated, c.gnss_released, c.velocity_used, c.velocity_gated);
+  out << formatted("  ZUPT %zu (gated %zu), ZIHR %zu (%zu), NHC %zu (%zu), mag %zu (%zu); static samples %zu\n", c.zupt, c.zupt_gated,
+                   c.zihr, c.zihr_gated, c.nhc, c.nhc_gated, c.mag, c.mag_gated, c.static_samples);
+  Json doc;
+  doc["pipeline_name"] = "gins";
+  doc["data"] = in.data_dir.string();
+  doc["constraints"] = o.constraints;
+  doc["gnss_rate_hz"] = o.gnss_rate;
+  doc["smooth"] = o.smooth;
+  doc["outage"] = o.outage;
+  doc["imu_samples"] = rec.imu.size();
+  doc["imu_rate_hz"] = res.imu_rate_hz;
+  doc["fixes"] = rec.fixes.size();
+  doc["alignment_after_first_fix_s"] = res.alignment_time - t0;
+  doc["epochs"] = res.forward.size();
+  doc["record_bytes"] = res.record_bytes;
+  Json counts;
+  for (const auto& [k, v] : {std::pair{"gnss_used", c.gnss_used}, {"gnss_withheld", c.gnss_withheld}, {"gnss_decimated", c.gnss_decimated},
+                             {"gnss_gated", c.gnss_gated}, {"gnss_released", c.gnss_released}, {"velocity_used", c.velocity_used},
+                             {"velocity_gated", c.velocity_gated}, {"zupt", c.zupt}, {"zupt_gated", c.zupt_gated}, {"zihr", c.zihr},
+                             {"zihr_gated", c.zihr_gated}, {"nhc", c.nhc}, {"nhc_gated", c.nhc_gated}, {"mag", c.mag},
+                             {"mag_gated", c.mag_gated}, {"static_samples", c.static_samples}, {"imu_refused", c.imu_refused},
+                             {"filter_failures", c.filter_failures}})
+    counts[k] = v;
+  doc["counts"] = std::move(counts);
+  Json st;
+  st["samples"] = ss.samples;
+  st["duration_s"] = ss.duration_s;
+  const double d = 1.0 / gins::kDeg;
+  for (const auto& [k, v, scale] : {std::tuple{"gyro_std_dps", ss.gyro_std, d}, {"gyro_mean_dps", ss.gyro_mean, d},
+                                    {"accel_std_mps2", ss.accel_std, 1.0}, {"accel_mean_mps2", ss.accel_mean, 1.0}}) {
+    Json a = Json::array();
+    for (int i = 0; i < 3; ++i) a.push_back(v(i) * scale);
+    st[k] = std::move(a);
+  }
+  doc["static_start"] = std::move(st);
+  if (!res.windows.empty()) {
+    const auto sc = eval::score_outages(rec.fixes, res);
+    out << formatted("  outages %zu (%zu scored, %zu RTK-fixed epochs, %zu before the alignment): horizontal error RMS / max\n",
+                     res.windows.size(), sc.outages_scored, sc.forward.epochs, sc.forward.unscored);
+    out << formatted("    forward   %7.3f / %7.3f m\n", sc.forward.rms, sc.forward.max);
+    doc["forward"] = scores_json(sc.forward);
+    if (o.smooth) {
+      out << formatted("    smoothed  %7.3f / %7.3f m\n", sc.smoothed.rms, sc.smoothed.max);
+      doc["smoothed"] = scores_json(sc.smoothed);
+    }
+    doc["outages_scored"] = sc.outages_scored;
+  }
+  if (o.smooth && !res.smooth_status.accepted()) {
+    err << "ctxfuse run gins: the RTS pass failed (" << describe(res.smooth_status.problem) << ")\n";
+    return 1;
+  }
+  if (!in.out_csv.empty() && !write_csv(in.out_csv, o.smooth ? res.smoothed : res.forward, err)) return 1;
+  if (!in.json.empty() && !write_json_file(doc, in.json, "run gins", err)) return 1;
+  return 0;
+}
+
+const RegisterRunPipeline reg{{"gins", "GNSS/INS error-state filter (papers B and D) on a recording: outages, constraints, RTS",
+                               "one RTKLIB *.pos and one imu*.csv with its .tag (RTK-fixed epochs of the .pos to score outages)",
+                               add_options, {}, run_gins}};
+
+}  // namespace
+}  // namespace ctxfuse::cli
