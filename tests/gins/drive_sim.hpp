@@ -11,20 +11,13 @@
 
 #include "ctxfuse/models/ins_nav.hpp"
 #include "ctxfuse/sim/random.hpp"
+#include "support/standard_normal.hpp"
 #include "states.hpp"
 
 namespace ctxfuse::test {
 
 inline constexpr double kGyroNoise = 0.0038 * kDeg;        // [rad/s/sqrt(Hz)]
 inline constexpr double kAccelNoise = 70e-6 * 9.80665;     // [m/s^2/sqrt(Hz)]
-
-// Three standard normal draws in a fixed order (x, y, z).
-inline Eigen::Vector3d normal3(sim::Rng& rng) {
-  const double x = rng.normal();
-  const double y = rng.normal();
-  const double z = rng.normal();
-  return {x, y, z};
-}
 
 struct DriveStep {
   double t = 0.0;                 // end of the step
@@ -69,10 +62,8 @@ inline Drive simulate_drive(double duration, const std::function<double(double)>
     x = m.predict(x, exact, d.dt, nullptr);
     DriveStep s;
     s.t = t1;
-    // One draw a statement: the order of evaluation of a constructor's arguments is
-    // unspecified (g++ goes right to left, clang left to right), and both must simulate one drive.
-    const Eigen::Vector3d gyro_noise = normal3(rng);
-    const Eigen::Vector3d accel_noise = normal3(rng);
+    const Eigen::Vector3d gyro_noise = standard_normal<3>(rng);
+    const Eigen::Vector3d accel_noise = standard_normal<3>(rng);
     s.imu.dtheta = dtheta + gyro_bias * d.dt + sg * gyro_noise;
     s.imu.dv = dv + accel_bias * d.dt + sa * accel_noise;
     s.imu.prev_dtheta = prev_dtheta;

@@ -10,6 +10,7 @@
 #include "ctxfuse/core/types.hpp"
 #include "ctxfuse/eval/consistency.hpp"
 #include "ctxfuse/sim/random.hpp"
+#include "support/standard_normal.hpp"
 
 namespace ctxfuse::reliability {
 
@@ -29,15 +30,7 @@ struct Verdict {
   }
 };
 
-/// N standard normal draws, in index order. Not Vector<N>(rng.normal(), ...): the order in
-/// which function arguments are evaluated is unspecified (g++ goes right to left, clang left
-/// to right), so the same seed would give each compiler other runs.
-template <int N>
-Vector<N> standard_normal(sim::Rng& rng) {
-  Vector<N> v;
-  for (int i = 0; i < N; ++i) v(i) = rng.normal();
-  return v;
-}
+using test::standard_normal;  // support/standard_normal.hpp
 
 inline void print_check(const std::string& what, const char* stat, const eval::BandCheck& c) {
   std::printf("%s %s: epochs inside [%.3f, %.3f] %.3f, time average %.4f (band [%.4f, %.4f]), failures %zu\n",

@@ -7,14 +7,11 @@
 
 #include "ctxfuse/models/ins_nav.hpp"
 #include "ctxfuse/sim/random.hpp"
+#include "support/standard_normal.hpp"
 
 namespace ctxfuse::reliability {
 
-inline Eigen::Vector3d normal3(sim::Rng& rng) {
-  Eigen::Vector3d v;
-  for (int i = 0; i < 3; ++i) v(i) = rng.normal();  // in index order (see standard_normal)
-  return v;
-}
+inline Eigen::Vector3d normal3(sim::Rng& rng) { return test::standard_normal<3>(rng); }
 
 /// Gives u the previous step's increments (none on the first step) and remembers u as the next
 /// step's previous.
