@@ -1,163 +1,14 @@
-// Fault injection for the region pipeline through the replay's tamper hook (io/replay.hpp):
-// a Fault says what happens to which stream over which stretch of the log's clock; a Checked
-// handler runs the pipeline's own replay handler (region_imm::detail::Runner) and, after every
-// step, checks the estimator's beliefs: finite, covariance symmetric and positive definite.
+// Fault injection for the region pipeline through the replay's tamper hook (the Fault and its
+// hook: fault_stream.hpp): a Checked handler runs the pipeline's own replay handler
+// (region_imm::detail::Runner) and, after every step, checks the estimator's beliefs: finite,
+// covariance symmetric and positive definite.
 #pragma once
-
-#include <Eigen/Cholesky>
-
-#include <algorithm>
-#include <cmath>
-#include <cstddef>
-#include <limits>
-#include <optional>
-#include <string>
-#include <type_traits>
 
 #include "ctxfuse/io/messages.hpp"
 #include "ctxfuse/pipelines/region_imm/run.hpp"
+#include "fault_stream.hpp"
 
 namespace ctxfuse::reliability {
-
-enum class StreamId { imu, speed, uwb, gnss, sat_epochs, all };
-enum class FaultKind { nan_value, inf_value, nan_stamp, gnss_jump, dropout, duplicate, out_of_order, clock_jump, wrong_anchor };
-
-template <class Msg>
-constexpr StreamId stream_of() {
-  if constexpr (std::is_same_v<Msg, io::ImuSample>) return StreamId::imu;
-  else if constexpr (std::is_same_v<Msg, io::SpeedSample>) return StreamId::speed;
-  else if constexpr (std::is_same_v<Msg, io::UwbRange>) return StreamId::uwb;
-  else if constexpr (std::is_same_v<Msg, io::GnssFix>) return StreamId::gnss;
-  else return StreamId::sat_epochs;
-}
-
-/// One fault over the messages of `stream` stamped in [begin, end) on the log's clock.
-///   nan_value / inf_value: the values the estimators read become NaN / +Inf (IMU rates,
-///     speed, range, fix position);
-///   nan_stamp: the stamp becomes NaN;  gnss_jump: the fix moves `jump_m` east;
-///   dropout: the messages are lost;
-///   duplicate: every second message is replaced by a copy of the one before it (the same
-///     measurement twice, the real one lost);
-///   out_of_order: every second message is stamped `reorder_s` before the one before it;
-///   clock_jump: from `begin` on every stream's stamps are `clock_jump_s` late (end unused);
-///   wrong_anchor: ranges from the first anchor heard after `begin` carry an anchor position
-///     `anchor_error_m` east of the true one.
-struct Fault {
-  std::string name;
-  FaultKind kind = FaultKind::dropout;
-  StreamId stream = StreamId::all;
-  double begin = 0.0, end = 0.0;
-  double jump_m = 100.0, clock_jump_s = 5.0, anchor_error_m = 5.0, reorder_s = 0.5;
-
-  /// When the fault is over (on the log's clock): the clock jump never ends, so its "end" is
-  /// the jump itself.
-  double over() const { return kind == FaultKind::clock_jump ? begin : end; }
-  /// The stamp the replay saw for a message originally stamped t.
-  double stamped(double t) const { return kind == FaultKind::clock_jump && t >= begin ? t + clock_jump_s : t; }
-  /// The original time of a replayed stamp (inverse of stamped() outside the jump's gap).
-  double original(double t) const {
-    return kind == FaultKind::clock_jump && t >= begin + clock_jump_s ? t - clock_jump_s : t;
-  }
-};
-
-/// The tamper hook for one Fault (copied into the replay; keeps per-stream memory).
-class FaultTamper {
- public:
-  explicit FaultTamper(const Fault& f) : f_(f) {}
-
-  template <class Msg>
-  bool operator()(Msg& m) {
-    const double t = m.t;
-    auto& mem = memory<Msg>();
-    const bool hit = (f_.stream == StreamId::all || f_.stream == stream_of<Msg>()) && t >= f_.begin && t < f_.end;
-    const std::optional<Msg> previous = mem.previous;
-    mem.previous = m;
-    switch (f_.kind) {
-      case FaultKind::clock_jump: m.t = f_.stamped(t); return true;
-      case FaultKind::nan_value:
-        if (hit) corrupt(m, std::numeric_limits<double>::quiet_NaN());
-        return true;
-      case FaultKind::inf_value:
-        if (hit) corrupt(m, std::numeric_limits<double>::infinity());
-        return true;
-      case FaultKind::nan_stamp:
-        if (hit) m.t = std::numeric_limits<double>::quiet_NaN();
-        return true;
-      case FaultKind::gnss_jump:
-        if constexpr (std::is_same_v<Msg, io::GnssFix>)
-          if (hit) m.position.x() += f_.jump_m;
-        return true;
-      case FaultKind::dropout: return !hit;
-      case FaultKind::duplicate:
-        if (hit && previous && (++mem.hits % 2 == 0)) m = *previous;
-        return true;
-      case FaultKind::out_of_order:
-        if (hit && previous && (++mem.hits % 2 == 0)) m.t = previous->t - f_.reorder_s;
-        return true;
-      case FaultKind::wrong_anchor:
-        if constexpr (std::is_same_v<Msg, io::UwbRange>) {
-          if (hit && anchor_ < 0) anchor_ = m.anchor_id;
-          if (hit && m.anchor_id == anchor_) m.anchor_position.x() += f_.anchor_error_m;
-        }
-        return true;
-    }
-    return true;
-  }
-
- private:
-  template <class Msg>
-  struct Memory {
-    std::optional<Msg> previous;
-    int hits = 0;
-  };
-  template <class Msg>
-  Memory<Msg>& memory() {
-    if constexpr (std::is_same_v<Msg, io::ImuSample>) return imu_;
-    else if constexpr (std::is_same_v<Msg, io::SpeedSample>) return speed_;
-    else if constexpr (std::is_same_v<Msg, io::UwbRange>) return uwb_;
-    else if constexpr (std::is_same_v<Msg, io::GnssFix>) return gnss_;
-    else return epochs_;
-  }
-  template <class Msg>
-  static void corrupt(Msg& m, double bad) {
-    if constexpr (std::is_same_v<Msg, io::ImuSample>) {
-      m.gyro.z() = bad;
-      m.accel.x() = bad;
-    } else if constexpr (std::is_same_v<Msg, io::SpeedSample>) {
-      m.speed_mps = bad;
-    } else if constexpr (std::is_same_v<Msg, io::UwbRange>) {
-      m.range_m = bad;
-    } else if constexpr (std::is_same_v<Msg, io::GnssFix>) {
-      m.position.x() = bad;
-    } else {
-      m.t = bad;  // a receiver epoch carries nothing else the estimators read
-    }
-  }
-
-  Fault f_;
-  int anchor_ = -1;
-  Memory<io::ImuSample> imu_;
-  Memory<io::SpeedSample> speed_;
-  Memory<io::UwbRange> uwb_;
-  Memory<io::GnssFix> gnss_;
-  Memory<io::SatEpoch> epochs_;
-};
-
-/// Messages of stream `s` (not `all`) in `log` stamped in [a, b).
-inline std::size_t messages_in(const io::SensorLog& log, StreamId s, double a, double b) {
-  auto count = [&](const auto& v) {
-    return static_cast<std::size_t>(std::count_if(v.begin(), v.end(), [&](const auto& m) { return m.t >= a && m.t < b; }));
-  };
-  switch (s) {
-    case StreamId::imu: return count(log.imu);
-    case StreamId::speed: return count(log.speed);
-    case StreamId::uwb: return count(log.uwb);
-    case StreamId::gnss: return count(log.gnss);
-    case StreamId::sat_epochs: return count(log.sat_epochs);
-    case StreamId::all: break;
-  }
-  return 0;
-}
 
 /// The region pipeline's replay report of stream `s` (its streams: speed, uwb, gnss, epochs).
 inline const io::StreamReport& report_of(const io::ReplayReport<4>& r, StreamId s) {
@@ -169,30 +20,6 @@ inline const io::StreamReport& report_of(const io::ReplayReport<4>& r, StreamId 
     default: return r.imu;
   }
 }
-
-/// What the checks after every step found.
-struct BeliefChecks {
-  std::size_t checked = 0;
-  std::size_t non_finite = 0;       // a mean or covariance entry NaN or infinite
-  std::size_t asymmetric = 0;       // |P - P'| above 1e-12 of max |P|
-  std::size_t not_pd = 0;           // Cholesky of P failed
-  template <int N>
-  void check(const Gaussian<N>& b) {
-    ++checked;
-    if (!b.mean.allFinite() || !b.cov.allFinite()) {
-      ++non_finite;
-      return;
-    }
-    const double scale = b.cov.cwiseAbs().maxCoeff();
-    if ((b.cov - b.cov.transpose()).cwiseAbs().maxCoeff() > 1e-12 * scale) ++asymmetric;
-    if (Eigen::LLT<SquareMatrix<N>>(b.cov).info() != Eigen::Success) ++not_pd;
-  }
-  void check_position(const Eigen::Vector2d& p) {
-    ++checked;
-    if (!p.allFinite()) ++non_finite;
-  }
-  bool clean() const { return checked > 0 && non_finite == 0 && asymmetric == 0 && not_pd == 0; }
-};
 
 /// Every belief the estimator holds: the IMM's modes and combined estimate, the federated
 /// filter's locals and global estimate, GNSS alone's held position.

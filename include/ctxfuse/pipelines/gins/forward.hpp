@@ -100,9 +100,13 @@ class ForwardPass {
     if (!aligned_) return;
     close_epoch();
     models::BodyIncrements inc;
-    if (!imu_.from_rates(u.gyro, u.accel, dt, inc).accepted()) {
+    // A refused sample (non-finite, absurd) is replaced by the last accepted one over its
+    // interval, as the replay does for a sample that never came: time and covariance advance.
+    if (imu_.from_rates(u.gyro, u.accel, dt, inc).accepted()) {
+      last_imu_ = u;
+    } else {
       ++counts_.imu_refused;
-      return;
+      if (!last_imu_ || !imu_.from_rates(last_imu_->gyro, last_imu_->accel, dt, inc).accepted()) return;
     }
     SquareMatrix<Model::dim> F;
     const Status st = eskf::predict(model_, belief_, inc, dt, {}, &F);
@@ -302,6 +306,7 @@ class ForwardPass {
   ChiSquareGate gate_;
   Model model_{};
   models::ImuInput imu_;
+  std::optional<io::ImuSample> last_imu_;  // the last sample propagate() accepted
   models::DynamicAlignment align_;
   models::GnssGeodeticPosition<S> gnss_;
   models::GnssVelocity<S> gnss_velocity_;
