@@ -68,8 +68,8 @@ TEST(CliRunGins, OutagesOnTheRealDriveCsvAndJsonAgree) {
   EXPECT_EQ(doc.at("outages_scored").get<int>(), 10);
   EXPECT_EQ(doc.at("forward").at("outages").size(), 11u);
   const double fwd = doc.at("forward").at("rms_m"), smoothed = doc.at("smoothed").at("rms_m");
-  EXPECT_NEAR(fwd, 2.397, 0.05);
-  EXPECT_NEAR(smoothed, 0.263, 0.005);
+  EXPECT_NEAR(fwd, 2.474, 0.05);
+  EXPECT_NEAR(smoothed, 0.281, 0.005);
   EXPECT_EQ(doc.at("static_start").at("samples").get<int>(), 3061);
 
   // The CSV (the smoothed trajectory) read back and scored again.

@@ -37,12 +37,12 @@ TEST(GinsRealDrive, OutageErrorsWithAndWithoutConstraints) {
   EXPECT_NEAR(both.static_start.accel_std.maxCoeff(), 0.130, 0.001);
 
   auto near = [](double measured, double expected) { EXPECT_NEAR(measured, expected, 0.02 * expected); };
-  near(s_none.forward.rms, 5.207);
-  near(s_none.forward.max, 22.06);
-  near(s_both.forward.rms, 2.397);
-  near(s_both.forward.max, 11.26);
-  near(s_both.smoothed.rms, 0.263);
-  near(s_both.smoothed.max, 0.764);
+  near(s_none.forward.rms, 5.311);
+  near(s_none.forward.max, 21.72);
+  near(s_both.forward.rms, 2.474);
+  near(s_both.forward.max, 11.87);
+  near(s_both.smoothed.rms, 0.281);
+  near(s_both.smoothed.max, 0.820);
   // Below the public figures of the upstream filter with ZUPT + NHC (3.46 / 14.2 m).
   EXPECT_LT(s_both.forward.rms, 3.46);
   EXPECT_LT(s_both.forward.max, 14.2);

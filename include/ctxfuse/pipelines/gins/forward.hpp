@@ -186,9 +186,10 @@ class ForwardPass {
     }
     gnss_.R = models::geodetic_position_noise(z, cov);
     // After gate_release_count fixes in a row refused by the gate it is the filter that is
-    // off, not the receiver: the next fix goes in ungated (and says so in the counts).
+    // off, not the receiver: the next fix is released into the filter (release_fix; the
+    // counts say so).
     const bool release = gated_in_row_ >= s_.gate_release_count;
-    const Status st = release ? eskf::update(model_, gnss_, belief_, z) : eskf::update(model_, gnss_, belief_, z, gate_);
+    const Status st = release ? release_fix(z) : eskf::update(model_, gnss_, belief_, z, gate_);
     gated_in_row_ = st.outcome == Outcome::gated ? gated_in_row_ + 1 : 0;
     counts_.gnss_released += release && st.accepted() ? 1 : 0;
     if (st.accepted()) {
@@ -235,6 +236,39 @@ class ForwardPass {
     open_ = false;
     if (rts_.record(open_t_, prior_, belief_).accepted()) used_.push_back(pending_used_);
     pending_used_ = 0;
+  }
+  /// A released fix (gate_release_count gated in a row): the position's variance is widened,
+  /// by the same amount on each axis, just enough that the fix's innovation lies on the gate's
+  /// boundary, and the fix then updates the filter as usual. An update of the unwidened
+  /// covariance with the gate off takes a fix 100 m off (a jump) at the confidence of a
+  /// converged filter and drags velocity and attitude through their correlations with the
+  /// position (the INS ran away to 217 m). docs/reliability.md compares this with a position
+  /// reset (PX4 EKF2's) and with scaling the position's standard deviation, on the faults and
+  /// on the real drive.
+  Status release_fix(const Eigen::Vector3d& z) {
+    using L = typename S::ErrorLayout;
+    constexpr int o = L::template offset<"p">();
+    Matrix<3, Model::dim> H;
+    const Eigen::Vector3d y = gnss_.residual(z, gnss_.predict(belief_.nominal, &H));
+    const Eigen::Matrix3d S0 = H * belief_.cov * H.transpose() + gnss_.R;
+    if (!y.allFinite() || !S0.allFinite()) return Status::invalid(Problem::non_finite_prediction);
+    const Eigen::Matrix3d Hp = H.template middleCols<3>(o);
+    const Eigen::Matrix3d dS = Hp * Hp.transpose();  // dS / d(the variance added to each axis)
+    const double limit = gate_.threshold(3);
+    auto nis = [&](double added) { return y.dot((S0 + added * dS).ldlt().solve(y)); };
+    if (!(nis(0.0) > limit)) return eskf::update(model_, gnss_, belief_, z);
+    // NIS falls monotonically with the added variance [m^2]: bracket, then bisect.
+    double lo = 0.0, hi = 1e-4;
+    while (nis(hi) > limit && hi < 1e12) lo = hi, hi *= 4.0;
+    for (int i = 0; i < 40; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      (nis(mid) > limit ? lo : hi) = mid;
+    }
+    B widened = belief_;
+    widened.cov.template block<3, 3>(o, o).diagonal().array() += hi;
+    const Status st = eskf::update(model_, gnss_, widened, z);
+    if (st.accepted()) belief_ = widened;
+    return st;
   }
   template <class Meas, int M>
   Status update(double t, const Meas& meas, const Vector<M>& z) {
