@@ -6,6 +6,7 @@
 #include <Eigen/Cholesky>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "ctxfuse/core/layout.hpp"
@@ -13,6 +14,7 @@
 #include "ctxfuse/filters/ekf.hpp"
 #include "ctxfuse/models/kinematic.hpp"
 #include "ctxfuse/sim/random.hpp"
+#include "support/standard_normal.hpp"
 
 namespace {
 using namespace ctxfuse;
@@ -66,7 +68,7 @@ Outcome monte_carlo(int runs, int steps, double true_psd, double assumed_psd) {
 
   Outcome out(static_cast<std::size_t>(steps));
   sim::Rng rng(20261123);
-  auto normal4 = [&] { return Vector<4>(rng.normal(), rng.normal(), rng.normal(), rng.normal()); };
+  auto normal4 = [&] { return test::standard_normal<4>(rng); };
   for (int r = 0; r < runs; ++r) {
     Gaussian<4> prior;
     prior.mean << 0.0, 0.0, 1.0, -0.5;
@@ -77,7 +79,7 @@ Outcome monte_carlo(int runs, int steps, double true_psd, double assumed_psd) {
     for (int k = 0; k < steps; ++k) {
       x = truth_model.predict(x, {}, dt, nullptr) + Q_chol * normal4();
       EXPECT_TRUE(f.predict({}, dt).accepted());
-      const Vector<2> z = L::get<"p">(x) + fix_sigma * Vector<2>(rng.normal(), rng.normal());
+      const Vector<2> z = L::get<"p">(x) + fix_sigma * test::standard_normal<2>(rng);
       const auto status = f.update(fix, z);
       EXPECT_TRUE(status.accepted());
       out.nis.add(static_cast<std::size_t>(k), status.nis);
@@ -93,6 +95,9 @@ TEST(Consistency, MatchedKalmanFilterStaysInsideTheBand) {
   EXPECT_EQ(out.nees.failures(), 0u);
   const auto nees_band = eval::average_chi_square_band(4, runs, 0.95);
   const auto nis_band = eval::average_chi_square_band(2, runs, 0.95);
+  std::printf("matched: NEES inside %.3f, NIS inside %.3f, NEES average %.3f, NIS average %.3f\n",
+              out.nees.fraction_inside(nees_band), out.nis.fraction_inside(nis_band), out.nees.overall_average(),
+              out.nis.overall_average());
   // 95 % of the steps expected inside; the steps are correlated, so allow some slack.
   EXPECT_GT(out.nees.fraction_inside(nees_band), 0.88);
   EXPECT_GT(out.nis.fraction_inside(nis_band), 0.88);
@@ -104,6 +109,8 @@ TEST(Consistency, UnderstatedProcessNoiseLeavesTheBand) {
   constexpr int runs = 100, steps = 200;
   const auto out = monte_carlo(runs, steps, 0.5, 0.025);  // the filter believes 20x less
   const auto nees_band = eval::average_chi_square_band(4, runs, 0.95);
+  std::printf("understated: NEES inside %.3f, NEES average %.3f\n", out.nees.fraction_inside(nees_band),
+              out.nees.overall_average());
   EXPECT_LT(out.nees.fraction_inside(nees_band), 0.2);
   EXPECT_GT(out.nees.overall_average(), 6.0);
 }

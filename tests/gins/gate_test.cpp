@@ -9,6 +9,7 @@
 #include "ctxfuse/models/ins_updates.hpp"
 #include "ctxfuse/sim/random.hpp"
 #include "states.hpp"
+#include "support/standard_normal.hpp"
 
 namespace {
 using namespace ctxfuse;
@@ -62,8 +63,8 @@ TEST(GinsGate, AcceptsNominalFixesAtTheGateProbability) {
     const ChiSquareGate gate(probability);
     int accepted = 0;
     for (int i = 0; i < n; ++i) {
-      const Eigen::Vector3d e = Lp * Eigen::Vector3d(rng.normal(), rng.normal(), rng.normal());
-      const Eigen::Vector3d noise = Lr * Eigen::Vector3d(rng.normal(), rng.normal(), rng.normal());
+      const Eigen::Vector3d e = Lp * test::standard_normal<3>(rng);
+      const Eigen::Vector3d noise = Lr * test::standard_normal<3>(rng);
       Vector<15> dx = Vector<15>::Zero();
       dx.head<3>() = e;
       const NavState truth = s.model.inject(s.belief.nominal, dx);

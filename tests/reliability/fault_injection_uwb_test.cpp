@@ -35,30 +35,10 @@ namespace nu = pipelines::nlos_uwb;
 
 constexpr double recovery_s = 10.0, window_s = 20.0;
 
-struct Drive {
-  sim::Drive drive;
-  std::vector<io::UwbRange> ranges;
-  double fault = 0.0;  // where the faults start: the middle of the indoor stretch
-};
-
-const Drive& drive() {
-  static const Drive d = [] {
-    Drive k;
-    sim::DriveConfig c = sim::scenario_config("default");
-    c.seed = 11;
-    k.drive = sim::simulate_drive(c);
-    k.ranges = sim::sensor_log(k.drive).uwb;
-    double first = -1.0, last = -1.0;
-    for (const auto& x : k.drive.truth)
-      if (x.region == sim::Region::indoor) {
-        if (first < 0.0) first = x.t;
-        last = x.t;
-      }
-    k.fault = 0.5 * (first + last);
-    return k;
-  }();
-  return d;
-}
+const SimulatedDrive& drive() { return simulated_drive(); }
+/// Where the faults start: the middle of the indoor stretch.
+double fault_time() { return drive().indoor_middle; }
+const std::vector<io::UwbRange>& ranges() { return drive().log.uwb; }
 
 const nu::Settings& settings() {
   static const nu::Settings s;
@@ -84,13 +64,6 @@ struct RunOutcome {
   BeliefChecks checks;
 };
 
-/// The ranges stamped before `t`.
-std::span<const io::UwbRange> before(double t) {
-  const auto& v = drive().ranges;
-  const auto end = std::partition_point(v.begin(), v.end(), [&](const io::UwbRange& r) { return r.t < t; });
-  return {v.data(), static_cast<std::size_t>(end - v.begin())};
-}
-
 /// A run replays the ranges up to the end of the check window of `f` (all the indoor stretch's
 /// check windows for the clean run): the estimator is causal, so nothing later changes them.
 RunOutcome run(const Fault* f) {
@@ -103,11 +76,11 @@ RunOutcome run(const Fault* f) {
   CheckedEpochs checked{process, est, out.checks};
   nu::EpochAssembler<CheckedEpochs> epochs(s.epoch_window_s, checked);
   nu::RangeHandler<decltype(epochs)> handler{epochs};
-  const double stop = drive().fault + 30.0 + recovery_s + window_s + 2.0;
-  const auto ranges = before(stop);
+  const double stop = fault_time() + 30.0 + recovery_s + window_s + 2.0;
+  const auto until = before(ranges(), stop);
   const std::span<const io::ImuSample> no_imu;
-  out.replay = f ? io::replay_tampered(handler, FaultTamper(*f), no_imu, ranges)
-                 : io::replay_tampered(handler, io::NoTamper{}, no_imu, ranges);
+  out.replay = f ? io::replay_tampered(handler, FaultTamper(*f), no_imu, until)
+                 : io::replay_tampered(handler, io::NoTamper{}, no_imu, until);
   epochs.flush();
   return out;
 }
@@ -119,11 +92,6 @@ const RunOutcome& clean() {
 
 double error_at(const nu::Estimate& e, double original_t) {
   return (e.position - eval::position_at(drive().drive.truth, original_t).head<2>()).norm();
-}
-
-/// The time an estimate's stamp stands for (a clock jump's stamps are late by the jump).
-double original(const Fault& f, double t) {
-  return f.kind == FaultKind::clock_jump && t >= f.begin + std::max(0.0, f.clock_jump_s) ? t - f.clock_jump_s : t;
 }
 
 std::size_t region_of(double t) { return static_cast<std::size_t>(eval::region_at(drive().drive.truth, t)); }
@@ -142,13 +110,7 @@ const std::array<double, 3>& clean_p95() {
 }
 
 Fault window(std::string n, FaultKind k, double begin, double length) {
-  Fault f;
-  f.name = std::move(n);
-  f.kind = k;
-  f.stream = StreamId::uwb;
-  f.begin = begin;
-  f.end = begin + length;
-  return f;
+  return fault_window(std::move(n), k, StreamId::uwb, begin, length);
 }
 
 /// Ranges of anchor `id` (any if < 0) the gate refused in [a, b) of a track.
@@ -158,21 +120,21 @@ std::size_t gated_in(const nu::Track& tr, double a, double b, int id) {
   }));
 }
 int first_anchor_after(double t) {
-  for (const auto& r : drive().ranges)
+  for (const auto& r : ranges())
     if (r.t >= t) return r.anchor_id;
   return -1;
 }
 
 /// Ranges of anchor `id` (any if < 0) stamped in [a, b).
 std::size_t ranges_in(double a, double b, int id = -1) {
-  return static_cast<std::size_t>(std::count_if(drive().ranges.begin(), drive().ranges.end(), [&](const io::UwbRange& r) {
+  return static_cast<std::size_t>(std::count_if(ranges().begin(), ranges().end(), [&](const io::UwbRange& r) {
     return r.t >= a && r.t < b && (id < 0 || r.anchor_id == id);
   }));
 }
 /// The last stamp before t.
 double last_before(double t) {
   double last = -std::numeric_limits<double>::infinity();
-  for (const auto& r : drive().ranges)
+  for (const auto& r : ranges())
     if (r.t < t) last = r.t;
   return last;
 }
@@ -185,73 +147,46 @@ void check_fault(const Fault& f) {
                                   << ", not PD " << out.checks.not_pd << " of " << out.checks.checked;
   const std::size_t n = ranges_in(f.begin, f.end);
   const io::StreamReport& rep = out.replay.streams[0];
-  char buf[160];
-  switch (f.kind) {
-    case FaultKind::nan_value:
-    case FaultKind::inf_value:
-      EXPECT_EQ(out.track.ranges_invalid - base.track.ranges_invalid, n);
-      EXPECT_EQ(out.replay.dropped(), 0u);
-      std::snprintf(buf, sizeof buf, "%zu of %zu refused by the EKF (Track::ranges_invalid)", out.track.ranges_invalid - base.track.ranges_invalid, n);
-      break;
-    case FaultKind::nan_stamp:
-      EXPECT_EQ(rep.non_finite, n);
-      std::snprintf(buf, sizeof buf, "%zu non-finite stamps dropped (replay report)", rep.non_finite);
-      break;
-    case FaultKind::dropout:
-      EXPECT_EQ(rep.tampered, n);
-      std::snprintf(buf, sizeof buf, "%zu dropped (replay report)", rep.tampered);
-      break;
-    case FaultKind::duplicate:
-      EXPECT_EQ(rep.repeated + rep.duplicate, n / 2);
-      std::snprintf(buf, sizeof buf, "%zu duplicate dropped (replay report)", rep.duplicate);
-      break;
-    case FaultKind::out_of_order:
-      EXPECT_EQ(rep.backwards, n / 2);
-      std::snprintf(buf, sizeof buf, "%zu backwards dropped (replay report)", rep.backwards);
-      break;
-    case FaultKind::clock_jump:
-      if (f.clock_jump_s < 0.0) {
-        // The ranges after the jump stamped (2 s early) before the last one delivered.
-        EXPECT_EQ(rep.backwards, ranges_in(f.begin, last_before(f.begin) - f.clock_jump_s));
-        std::snprintf(buf, sizeof buf, "%zu backwards dropped (replay report)", rep.backwards);
-      } else {
-        // One stream on one clock: a late clock is a 5 s gap, which the motion model bridges.
-        EXPECT_EQ(out.replay.dropped(), 0u);
-        std::snprintf(buf, sizeof buf, "none possible (one stream, one clock): a 5 s gap, %zu dropped", out.replay.dropped());
-      }
-      break;
-    case FaultKind::wrong_anchor: {
-      const int id = first_anchor_after(f.begin);
-      const std::size_t g = gated_in(out.track, f.begin, f.end, id) - gated_in(base.track, f.begin, f.end, id);
-      EXPECT_GE(g, 1u);
-      std::snprintf(buf, sizeof buf, "%zu more of anchor %d's %zu ranges gated, %zu restarts", g, id, ranges_in(f.begin, f.end, id),
-                    out.track.restarts - base.track.restarts);
-      break;
-    }
-    default: buf[0] = 0;
+  std::string evidence;
+  if (const auto replayed = replay_evidence(f, rep, n)) {
+    evidence = *replayed;
+  } else if (f.kind == FaultKind::nan_value || f.kind == FaultKind::inf_value) {
+    const std::size_t refused = out.track.ranges_invalid - base.track.ranges_invalid;
+    EXPECT_EQ(refused, n);
+    EXPECT_EQ(out.replay.dropped(), 0u);
+    evidence = format("%zu of %zu refused by the EKF (Track::ranges_invalid)", refused, n);
+  } else if (f.kind == FaultKind::clock_jump && f.clock_jump_s < 0.0) {
+    // The ranges after the jump stamped (2 s early) before the last one delivered.
+    EXPECT_EQ(rep.backwards, ranges_in(f.begin, last_before(f.begin) - f.clock_jump_s));
+    evidence = format("%zu backwards dropped (replay report)", rep.backwards);
+  } else if (f.kind == FaultKind::clock_jump) {
+    // One stream on one clock: a late clock is a 5 s gap, which the motion model bridges.
+    EXPECT_EQ(out.replay.dropped(), 0u);
+    evidence = format("none possible (one stream, one clock): a 5 s gap, %zu dropped", out.replay.dropped());
+  } else if (f.kind == FaultKind::wrong_anchor) {
+    const int id = first_anchor_after(f.begin);
+    const std::size_t g = gated_in(out.track, f.begin, f.end, id) - gated_in(base.track, f.begin, f.end, id);
+    EXPECT_GE(g, 1u);
+    evidence = format("%zu more of anchor %d's %zu ranges gated, %zu restarts", g, id, ranges_in(f.begin, f.end, id),
+                      out.track.restarts - base.track.restarts);
   }
 
   // Recovery.
   const auto& p95 = clean_p95();
-  double during = 0.0, worst = 0.0, share = 0.0;
-  std::size_t checked = 0;
+  Recovery rec{f, recovery_s, window_s};
   const auto& ce = base.track.estimates;
   for (const auto& e : out.track.estimates) {
-    const double t = original(f, e.t);
+    const double t = f.original(e.t);
     const double err = error_at(e, t);
-    if (t >= f.begin && t < f.over() + recovery_s) during = std::max(during, err);
-    if (t < f.over() + recovery_s || t > f.over() + recovery_s + window_s) continue;
+    if (!rec.take(t, err)) continue;
     // The clean estimate nearest in time (epochs are 0.1 s apart; a clock jump shifts them).
     const auto j = std::lower_bound(ce.begin(), ce.end(), t, [](const nu::Estimate& x, double v) { return x.t < v; });
     ASSERT_NE(j, ce.end());
-    const double bound = 2.0 * std::max(p95[region_of(t)], error_at(*j, j->t));
-    EXPECT_LE(err, bound) << "t " << t;
-    ++checked;
-    worst = std::max(worst, err);
-    share = std::max(share, err / bound);
+    rec.check(t, err, 2.0 * std::max(p95[region_of(t)], error_at(*j, j->t)));
   }
-  EXPECT_GE(checked, static_cast<std::size_t>(window_s * 5.0));  // 10 Hz epochs, half of them at least
-  std::printf("| %s | NLOS UWB (EKF) | %s | %.2f | %.2f | %.2f |\n", f.name.c_str(), buf, during, worst, share);
+  EXPECT_GE(rec.checked, static_cast<std::size_t>(window_s * 5.0));  // 10 Hz epochs, half of them at least
+  std::printf("| %s | NLOS UWB (EKF) | %s | %.2f | %.2f | %.2f |\n", f.name.c_str(), evidence.c_str(), rec.during, rec.worst,
+              rec.share);
 }
 
 TEST(FaultInjectionUwb, CleanRunIsClean) {
@@ -261,11 +196,11 @@ TEST(FaultInjectionUwb, CleanRunIsClean) {
   ASSERT_FALSE(o.track.estimates.empty());
   const auto& p = clean_p95();
   std::printf("clean NLOS UWB (EKF): %zu estimates, error p95 outdoor %.2f m, transition %.2f m, indoor %.2f m; faults at %.1f s\n",
-              o.track.estimates.size(), p[0], p[1], p[2], drive().fault);
+              o.track.estimates.size(), p[0], p[1], p[2], fault_time());
 }
 
 TEST(FaultInjectionUwb, Faults) {
-  const double t = drive().fault;
+  const double t = fault_time();
   std::vector<Fault> v{
       window("UWB NaN 5 s", FaultKind::nan_value, t, 5.0),
       window("UWB Inf 5 s", FaultKind::inf_value, t, 5.0),

@@ -1,21 +1,31 @@
 // The generic part of fault injection through the replay's tamper hook (io/replay.hpp), for
 // every pipeline's fault tests: a Fault says what happens to which stream over which stretch of
 // the log's clock, FaultTamper is the hook that does it, BeliefChecks the checks of a belief
-// after a step (finite, covariance symmetric and positive definite).
+// after a step (finite, covariance symmetric and positive definite), replay_evidence and
+// Recovery the evidence and recovery checks the tests share, simulated_drive the drive of the
+// region and UWB pipelines' tests.
 #pragma once
 
 #include <Eigen/Cholesky>
+#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdarg>
 #include <cstddef>
+#include <cstdio>
 #include <limits>
 #include <optional>
+#include <span>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 #include "ctxfuse/core/gaussian.hpp"
 #include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/io/replay.hpp"
+#include "ctxfuse/sim/scenarios.hpp"
+#include "ctxfuse/sim/streams.hpp"
 
 namespace ctxfuse::reliability {
 
@@ -54,11 +64,24 @@ struct Fault {
   double over() const { return kind == FaultKind::clock_jump ? begin : end; }
   /// The stamp the replay saw for a message originally stamped t.
   double stamped(double t) const { return kind == FaultKind::clock_jump && t >= begin ? t + clock_jump_s : t; }
-  /// The original time of a replayed stamp (inverse of stamped() outside the jump's gap).
+  /// The original time of a replayed stamp (inverse of stamped()). A clock jumped back stamps
+  /// its first messages before the jump (`begin`): a stamp before `begin` is taken as one from
+  /// before the jump.
   double original(double t) const {
-    return kind == FaultKind::clock_jump && t >= begin + clock_jump_s ? t - clock_jump_s : t;
+    return kind == FaultKind::clock_jump && t >= begin + std::max(0.0, clock_jump_s) ? t - clock_jump_s : t;
   }
 };
+
+/// A fault of `kind` on stream `s` over [begin, begin + length).
+inline Fault fault_window(std::string name, FaultKind kind, StreamId s, double begin, double length) {
+  Fault f;
+  f.name = std::move(name);
+  f.kind = kind;
+  f.stream = s;
+  f.begin = begin;
+  f.end = begin + length;
+  return f;
+}
 
 /// The tamper hook for one Fault (copied into the replay; keeps per-stream memory).
 class FaultTamper {
@@ -188,5 +211,116 @@ struct BeliefChecks {
   }
   bool clean() const { return checked > 0 && non_finite == 0 && asymmetric == 0 && not_pd == 0; }
 };
+
+/// The messages of `v` stamped before `t` (a stream is in time order).
+template <class Msg>
+std::span<const Msg> before(const std::vector<Msg>& v, double t) {
+  const auto end = std::partition_point(v.begin(), v.end(), [&](const Msg& m) { return m.t < t; });
+  return {v.data(), static_cast<std::size_t>(end - v.begin())};
+}
+
+/// printf into a string (a fault table's evidence column).
+#if defined(__GNUC__)
+__attribute__((format(printf, 1, 2)))
+#endif
+inline std::string format(const char* fmt, ...) {
+  char buf[160];
+  std::va_list args;
+  va_start(args, fmt);
+  std::vsnprintf(buf, sizeof buf, fmt, args);
+  va_end(args);
+  return buf;
+}
+
+/// Whether the messages of stream `s` may share a stamp (io::kSharedStamps): a copy of one is
+/// then counted as a `duplicate`, otherwise as `repeated`.
+inline bool shares_stamps(StreamId s) {
+  switch (s) {
+    case StreamId::imu: return io::kSharedStamps<io::ImuSample>;
+    case StreamId::speed: return io::kSharedStamps<io::SpeedSample>;
+    case StreamId::uwb: return io::kSharedStamps<io::UwbRange>;
+    case StreamId::gnss: return io::kSharedStamps<io::GnssFix>;
+    case StreamId::sat_epochs: return io::kSharedStamps<io::SatEpoch>;
+    case StreamId::all: break;
+  }
+  return false;
+}
+
+/// The evidence of a fault the replay drops itself (a NaN stamp, a dropout, a duplicate, out of
+/// order) in `rep`, the replay report of the faulted stream: every touched message counted (`n`
+/// the stream's messages in the fault's window; a duplicate or out-of-order fault touches every
+/// second one). Returns the table's evidence, or nothing for the faults the replay passes on.
+inline std::optional<std::string> replay_evidence(const Fault& f, const io::StreamReport& rep, std::size_t n) {
+  switch (f.kind) {
+    case FaultKind::nan_stamp:
+      EXPECT_EQ(rep.non_finite, n);
+      return format("%zu non-finite stamps dropped (replay report)", rep.non_finite);
+    case FaultKind::dropout:
+      EXPECT_EQ(rep.tampered, n);
+      return format("%zu dropped (replay report)", rep.tampered);
+    case FaultKind::duplicate: {
+      const bool shared = shares_stamps(f.stream);
+      const std::size_t copies = shared ? rep.duplicate : rep.repeated;
+      EXPECT_EQ(rep.repeated + rep.duplicate, n / 2);
+      return format("%zu %s dropped (replay report)", copies, shared ? "duplicate" : "repeated");
+    }
+    case FaultKind::out_of_order:
+      EXPECT_EQ(rep.backwards, n / 2);
+      return format("%zu backwards dropped (replay report)", rep.backwards);
+    default: return std::nullopt;
+  }
+}
+
+/// The recovery check of a faulted run, one estimate at a time in time order: the worst error
+/// from the fault's begin until `recovery_s` after it is over (`during`), and in the check
+/// window (the `window_s` after that) every error within its bound, the worst error and the
+/// worst share of the bound.
+struct Recovery {
+  const Fault& f;
+  double recovery_s, window_s;
+  double t0 = 0.0;  // the clock's origin, for the failure messages
+  double during = 0.0, worst = 0.0, share = 0.0;
+  std::size_t checked = 0;
+
+  /// Takes the error `err` of an estimate at original time `t`; whether `t` is in the check
+  /// window (then the caller checks it against its bound).
+  bool take(double t, double err) {
+    if (t >= f.begin && t < f.over() + recovery_s) during = std::max(during, err);
+    return t >= f.over() + recovery_s && t <= f.over() + recovery_s + window_s;
+  }
+  void check(double t, double err, double bound) {
+    EXPECT_LE(err, bound) << "t " << t - t0;
+    ++checked;
+    worst = std::max(worst, err);
+    share = std::max(share, err / bound);
+  }
+};
+
+/// The simulated drive of the region and UWB pipelines' fault tests: the default scenario,
+/// seed 11, its sensor log, and the middle of its indoor stretch (where their indoor faults start).
+struct SimulatedDrive {
+  sim::Drive drive;
+  io::SensorLog log;
+  double indoor_middle = 0.0;
+};
+
+inline const SimulatedDrive& simulated_drive() {
+  static const SimulatedDrive d = [] {
+    SimulatedDrive k;
+    sim::DriveConfig c = sim::scenario_config("default");
+    c.seed = 11;
+    k.drive = sim::simulate_drive(c);
+    k.log = sim::sensor_log(k.drive);
+    double first = -1.0, last = -1.0;
+    for (const auto& x : k.drive.truth)
+      if (x.region == sim::Region::indoor) {
+        if (first < 0.0) first = x.t;
+        last = x.t;
+      }
+    k.indoor_middle = 0.5 * (first + last);
+    return k;
+  }();
+  return d;
+}
 
 }  // namespace ctxfuse::reliability
