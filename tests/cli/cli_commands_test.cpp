@@ -60,6 +60,20 @@ TEST(CliSim, WritesAllSevenLogs) {
   EXPECT_EQ(slurp(d / "imu.csv").substr(0, 8), "t,gyro_x");
 }
 
+// A real option out of its range is named in words; CLI11's own PositiveNumber wrote out the
+// largest double in full.
+TEST(CliOptions, RealOutOfRangeSaidInWords) {
+  for (const char* v : {"-1", "0", "nan", "inf", "2x"}) {
+    const auto r = run(std::string("run gins --data /tmp --gnss-rate ") + v);
+    EXPECT_EQ(r.code, 2) << v;
+    EXPECT_NE(r.out.find(std::string("--gnss-rate: '") + v + "' is not a positive number"), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("1797693"), std::string::npos) << r.out;
+  }
+  const auto r = run("classify train --gamma -0.5");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("--gamma: '-0.5' is not a non-negative number"), std::string::npos) << r.out;
+}
+
 TEST(CliSim, UsageErrors) {
   auto r = run("sim --seed 1");
   EXPECT_EQ(r.code, 2);

@@ -204,8 +204,8 @@ int classify_train(Args args, std::ostream& out, std::ostream& err) {
   app.add_option("--multiclass", s.multiclass, "ovo (libsvm's one-vs-one) or ovr (one-vs-rest)")->check(CLI::IsMember({"ovo", "ovr"}));
   app.add_flag("--probability", s.probability, "fit Platt probabilities");
   app.add_flag("--no-standardize", s.no_standardize, "train on the raw features");
-  app.add_option("--C", s.C, "C (ignored with --pso)")->check(CLI::PositiveNumber);
-  app.add_option("--gamma", s.gamma, "RBF gamma; 0 = 1 / features (ignored with --pso)")->check(CLI::NonNegativeNumber);
+  app.add_option("--C", s.C, "C (ignored with --pso)")->check(ctxfuse::cli::kPositiveNumber);
+  app.add_option("--gamma", s.gamma, "RBF gamma; 0 = 1 / features (ignored with --pso)")->check(ctxfuse::cli::kNonNegativeNumber);
   app.add_option("--class-weight", s.class_weight,
                  "C multipliers per class: auto (n / (classes * n_class)) or LABEL:W,LABEL:W,... (default: none)");
   app.add_option("--cv", s.cv, "folds: auto, blocked, groups or stratified")->check(CLI::IsMember({"auto", "blocked", "groups", "stratified"}));

@@ -217,8 +217,8 @@ int run_context(Args args, std::ostream& out, std::ostream& err) {
   app.add_option("--test", test_path, "labelled CSV to classify")->required();
   app.add_option("--validation-fraction", s.validation_fraction, "F: the last F of --train validate")->check(CLI::Range(0.0, 1.0));
   app.add_option("--kernel", kernel, "SVM kernel: linear or rbf")->check(CLI::IsMember({"linear", "rbf"}));
-  app.add_option("--C", s.svm.C, "SVM C")->check(CLI::PositiveNumber);
-  app.add_option("--gamma", s.svm.gamma, "RBF gamma; 0 = 1 / features")->check(CLI::NonNegativeNumber);
+  app.add_option("--C", s.svm.C, "SVM C")->check(ctxfuse::cli::kPositiveNumber);
+  app.add_option("--gamma", s.svm.gamma, "RBF gamma; 0 = 1 / features")->check(ctxfuse::cli::kNonNegativeNumber);
   app.add_option("--covariance", covariance, "HMM emission covariance: full or diagonal")->check(CLI::IsMember({"full", "diagonal"}));
   app.add_option("--decoder", decoder, "HMM decoding: viterbi or filter")->check(CLI::IsMember({"viterbi", "filter"}));
   if (const auto status = ctxfuse::cli::parse_options(app, args.subspan(1), out, err)) return *status;

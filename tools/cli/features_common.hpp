@@ -14,6 +14,7 @@
 #include <CLI/CLI.hpp>
 #include <ctxfuse/features/gnss_scene.hpp>
 
+#include "cli/options.hpp"
 #include "cli/registry.hpp"
 
 namespace ctxfuse::cli::features_cli {
@@ -45,9 +46,9 @@ inline int usage_error(std::ostream& err, const std::string& command, const std:
 /// --window, --cn0-window and --fill of the scene features (windows in seconds).
 inline void add_window_options(CLI::App& app, features::GnssSceneConfig& c) {
   app.add_option("--window", c.window_s, "window [s] of the satellite-count and PDOP std (the paper: 4 epochs at 1 Hz)")
-      ->check(CLI::PositiveNumber);
+      ->check(ctxfuse::cli::kPositiveNumber);
   app.add_option("--cn0-window", c.cn0_window_s, "window [s] of the per-satellite C/N0 std (the paper: 4 epochs at 1 Hz)")
-      ->check(CLI::PositiveNumber);
+      ->check(ctxfuse::cli::kPositiveNumber);
   app.add_option("--fill", c.fill_value, "value of a feature that cannot be computed (e.g. PDOP with < 4 satellites)");
 }
 

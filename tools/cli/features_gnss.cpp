@@ -83,7 +83,7 @@ int run_gnss(Args args, std::ostream& out, std::ostream& err) {
   app.add_option("--sats", sats_path, "per-satellite CSV")->required();
   app.add_option("--out", out_path, "feature CSV (default: stdout)");
   app.add_option("--labels", labels_path, "CSV with columns time_s and label: each epoch takes the label nearest in time");
-  app.add_option("--label-tolerance", tolerance, "largest |epoch time - label time| [s] of a join")->check(CLI::NonNegativeNumber);
+  app.add_option("--label-tolerance", tolerance, "largest |epoch time - label time| [s] of a join")->check(ctxfuse::cli::kNonNegativeNumber);
   add_window_options(app, config);
   if (const auto status = parse_options(app, args, out, err)) return *status;
   try {

@@ -61,7 +61,7 @@ int run_nmea(Args args, std::ostream& out, std::ostream& err) {
   app.add_option("--out", out_path, "labelled feature CSV of every labelled epoch");
   app.add_option("--meta", meta_path, "time_s, label, horizontal error, GGA quality per row");
   app.add_option("--open-max-error", thresholds.open_max_error_m, "open when the horizontal error [m] is below this")
-      ->check(CLI::PositiveNumber);
+      ->check(ctxfuse::cli::kPositiveNumber);
   app.add_option("--train-fraction", train_fraction, "split in time order: first F of the labelled epochs to --train-out (0 = no split)")
       ->check(CLI::Range(0.0, 1.0));
   app.add_option("--train-out", train_out, "first part of the split");

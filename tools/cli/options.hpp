@@ -8,6 +8,8 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <optional>
 #include <ostream>
 #include <string>
@@ -33,6 +35,22 @@ inline const CLI::Validator kNonNegativeInteger(
                                                                                    : "'" + s + "' is not a non-negative integer";
     },
     "", "non-negative integer");
+
+/// For real-valued options that must be > 0 (or >= 0): a finite number in range, said in
+/// words. CLI11's PositiveNumber names its range as "0.000000 to 1797693...368.000000", the
+/// largest double written out in full.
+inline CLI::Validator real_at_least(double lowest, bool inclusive, std::string words) {
+  return CLI::Validator(
+      [=](std::string& s) {
+        char* end = nullptr;
+        const double v = std::strtod(s.c_str(), &end);
+        const bool number = !s.empty() && end == s.c_str() + s.size() && std::isfinite(v);
+        return number && (inclusive ? v >= lowest : v > lowest) ? std::string() : "'" + s + "' is not " + words;
+      },
+      "", words);
+}
+inline const CLI::Validator kPositiveNumber = real_at_least(0.0, false, "a positive number");
+inline const CLI::Validator kNonNegativeNumber = real_at_least(0.0, true, "a non-negative number");
 
 /// Parses `args` into `app`. Returns nothing when the command should go on, otherwise the
 /// exit status to return: 0 after printing --help to `out`, 2 after printing a usage error

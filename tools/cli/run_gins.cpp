@@ -92,7 +92,7 @@ std::shared_ptr<void> add_options(CLI::App& app) {
   app.add_option("--outage", o->outage, "simulated GNSS outages LEN:PERIOD:START [s] (START after the first GNSS epoch; windows end "
                                         "30 s before the last); scored against the RTK-fixed epochs")
       ->check(CLI::Validator([](std::string& s) { return parse_outage(s, nullptr); }, "LEN:PERIOD:START", "outage"));
-  app.add_option("--gnss-rate", o->gnss_rate, "decimate GNSS to HZ (default: every fix)")->check(CLI::PositiveNumber);
+  app.add_option("--gnss-rate", o->gnss_rate, "decimate GNSS to HZ (default: every fix)")->check(ctxfuse::cli::kPositiveNumber);
   app.add_option("--constraints", o->constraints, "any of zupt,zihr,nhc,mag, or none")
       ->check(CLI::Validator([](std::string& s) { return parse_constraints(s, nullptr); }, "LIST", "constraints"));
   app.add_flag("--smooth", o->smooth, "RTS-smooth the forward pass (the CSV is then the smoothed trajectory)");

@@ -244,8 +244,7 @@ class ForwardPass {
   /// converged filter and drags velocity and attitude through their correlations with the
   /// position (the INS ran away to 217 m). A position reset (PX4 EKF2's), which drops those
   /// correlations, recovers from the jump too, but after a real outage it is through them that
-  /// a late fix corrects the heading: on the real drive it cost more than this widening
-  /// (docs/reliability.md, "The NLOS UWB and GNSS/INS pipelines").
+  /// a late fix corrects the heading (docs/reliability.md, "The NLOS UWB and GNSS/INS pipelines").
   Status release_fix(const Eigen::Vector3d& z) {
     using L = typename S::ErrorLayout;
     constexpr int o = L::template offset<"p">();
