@@ -14,6 +14,7 @@
 #include <ostream>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "cli/registry.hpp"
@@ -38,8 +39,9 @@ inline const CLI::Validator kNonNegativeInteger(
 
 /// For real-valued options that must be > 0 (or >= 0): a finite number in range, said in
 /// words. CLI11's PositiveNumber names its range as "0.000000 to 1797693...368.000000", the
-/// largest double written out in full.
-inline CLI::Validator real_at_least(double lowest, bool inclusive, std::string words) {
+/// largest double written out in full. `tag` is what --help shows after the type, as CLI11's
+/// own validators do (FLOAT:POSITIVE).
+inline CLI::Validator real_at_least(double lowest, bool inclusive, std::string words, std::string tag) {
   return CLI::Validator(
       [=](std::string& s) {
         char* end = nullptr;
@@ -47,10 +49,10 @@ inline CLI::Validator real_at_least(double lowest, bool inclusive, std::string w
         const bool number = !s.empty() && end == s.c_str() + s.size() && std::isfinite(v);
         return number && (inclusive ? v >= lowest : v > lowest) ? std::string() : "'" + s + "' is not " + words;
       },
-      "", words);
+      std::move(tag), words);
 }
-inline const CLI::Validator kPositiveNumber = real_at_least(0.0, false, "a positive number");
-inline const CLI::Validator kNonNegativeNumber = real_at_least(0.0, true, "a non-negative number");
+inline const CLI::Validator kPositiveNumber = real_at_least(0.0, false, "a positive number", "POSITIVE");
+inline const CLI::Validator kNonNegativeNumber = real_at_least(0.0, true, "a non-negative number", "NONNEGATIVE");
 
 /// Parses `args` into `app`. Returns nothing when the command should go on, otherwise the
 /// exit status to return: 0 after printing --help to `out`, 2 after printing a usage error
