@@ -232,6 +232,29 @@ TEST(SvmRbfKernel, ExponentialMatchesLibmToAFewUlp) {
   EXPECT_EQ(ctxfuse::classify::svm_detail::exp_nonpositive(0.0), 1.0);
 }
 
+// The kernel evaluates exp(-gamma d2) from d2 with gamma folded into its constants, so the
+// accuracy is checked over the whole clamped range of d2 for several gammas. Reference: libm's
+// exp of the rounded product t, corrected by the product's rounding error t_lo (exp(t + t_lo) =
+// exp(t) (1 + t_lo) up to t_lo^2 / 2, and |t_lo| <= 2^-53 |t| < 1e-13 for |t| <= 708).
+TEST(SvmRbfKernel, ExponentialOfScaledDistanceMatchesLibmToAFewUlp) {
+  using namespace ctxfuse::classify::svm_detail;
+  std::mt19937_64 rng(13);
+  for (const double gamma : {0.5, 1.0 / 3.0, 7.3, 1e-3, 123.4}) {
+    const RbfExp e = rbf_exp_constants(gamma);
+    std::uniform_real_distribution<double> u(0.0, e.d2_max);
+    double worst = 0.0;
+    for (int i = 0; i < 100000; ++i) {
+      const double d2 = i < 1000 ? 1e-3 * i / gamma : u(rng);
+      const double t = -gamma * d2;
+      const double t_lo = std::fma(-gamma, d2, -t);
+      const double ref = std::exp(t) * (1.0 + t_lo);
+      worst = std::max(worst, std::abs(exp_neg_gamma(d2, e) - ref) / ref);
+    }
+    EXPECT_LT(worst, 4 * std::numeric_limits<double>::epsilon()) << "gamma " << gamma;
+    EXPECT_EQ(exp_neg_gamma(0.0, e), 1.0) << "gamma " << gamma;
+  }
+}
+
 TEST(SvmRbfKernel, EveryCompiledVariantAgreesWithScalarFormula) {
   using namespace ctxfuse::classify::svm_detail;
   constexpr int n = kRbfBlock;
@@ -246,6 +269,7 @@ TEST(SvmRbfKernel, EveryCompiledVariantAgreesWithScalarFormula) {
   const std::array<double, 3> x = {0.3, -1.2, 2.2};
   c0[7] = 1e140;  // far beyond the clamp: the kernel value must be ~0, not garbage
   c1[9] = -3e149;
+  const RbfExp e = rbf_exp_constants(0.7);
   const auto check = [&](const char* name) {
     for (int i = 0; i < n; ++i) {
       const auto k = static_cast<std::size_t>(i);
@@ -255,17 +279,17 @@ TEST(SvmRbfKernel, EveryCompiledVariantAgreesWithScalarFormula) {
       ASSERT_NEAR(out[k], ref, 1e-13 * ref + 1e-300) << name << " element " << i;
     }
   };
-  rbf_block_baseline<3>({c0.data(), c1.data(), c2.data()}, x, -0.7, out.data());
+  rbf_block_baseline<3>({c0.data(), c1.data(), c2.data()}, x, e, out.data());
   check("baseline");
 #ifdef CTXFUSE_SVM_RUNTIME_AVX2
   if (cpu_has_avx2_fma()) {
     out.fill(0.0);
-    rbf_block_avx2<3>({c0.data(), c1.data(), c2.data()}, x, -0.7, out.data());
+    rbf_block_avx2<3>({c0.data(), c1.data(), c2.data()}, x, e, out.data());
     check("avx2");
   }
   if (cpu_has_avx512f()) {
     out.fill(0.0);
-    rbf_block_avx512<3>({c0.data(), c1.data(), c2.data()}, x, -0.7, out.data());
+    rbf_block_avx512<3>({c0.data(), c1.data(), c2.data()}, x, e, out.data());
     check("avx512");
   }
 #endif

@@ -220,7 +220,7 @@ void rbf_sums(const SvmModel<Dim, MaxClasses>& model, const Eigen::Matrix<double
   std::array<double, Dim> x{};
   for (int f = 0; f < Dim; ++f) x[static_cast<std::size_t>(f)] = xs[f];
   const Eigen::Index n = model.support_vectors.rows();
-  const double neg_gamma = -model.gamma;
+  const RbfExp exp_constants = rbf_exp_constants(model.gamma);
   const bool single = machines == 1;
   // Single machine: per-lane partial sums, added up once. Several machines: kernel values,
   // then one dot product per machine.
@@ -244,9 +244,9 @@ void rbf_sums(const SvmModel<Dim, MaxClasses>& model, const Eigen::Matrix<double
       }
     }
     if (single) {
-      rbf_block_dispatch<Dim, true>(columns, x, neg_gamma, work.data(), coef);
+      rbf_block_dispatch<Dim, true>(columns, x, exp_constants, work.data(), coef);
     } else {
-      rbf_block_dispatch<Dim, false>(columns, x, neg_gamma, work.data(), nullptr);
+      rbf_block_dispatch<Dim, false>(columns, x, exp_constants, work.data(), nullptr);
       for (int m = 0; m < machines; ++m)
         sums[m] += model.coefficients.row(m).segment(start, len).dot(work.head(len).matrix().transpose());
     }
