@@ -3,12 +3,16 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
+#include "cli/plot_data.hpp"
 #include "support/run_cli.hpp"
 
 namespace fs = std::filesystem;
@@ -195,11 +199,35 @@ TEST(CliDemo, SummaryJsonAndSectionsNotBuilt) {
 
 TEST(CliDemo, PlotsArePngFilesOrAClearMessage) {
   const auto dir = scratch("plots");
-  const auto r = run("demo --seed 1 --plot \"" + dir.string() + "\"");
+  const auto r = run("demo --seed 1 --plot \"" + dir.string() + "\" --json \"" + (dir / "demo.json").string() + "\"");
   ASSERT_EQ(r.code, 0) << r.out;
   if (r.out.find("gnuplot not found") != std::string::npos) GTEST_SKIP() << "gnuplot is not installed";
   for (const char* f : {"drive_trajectory.png", "gnss_error_cdf.png"}) {
     ASSERT_TRUE(fs::exists(dir / f)) << f << "\n" << r.out;
     EXPECT_EQ(slurp(dir / f).substr(1, 3), "PNG") << f;
+  }
+  // Section nlos_uwb: the gated graph with the paper's rule; its plotted errors over the scored
+  // span are its table row's, and its left-out epochs are the row's count.
+  std::ifstream js(dir / "demo.json");
+  const nlohmann::json doc = nlohmann::json::parse(js);
+  if (!doc.contains("nlos_uwb")) GTEST_SKIP() << "section nlos_uwb not built";
+  namespace t = ctxfuse::test;
+  const auto& row = doc.at("nlos_uwb").at("positioning").at("graph_gate_paper_rule");
+  const std::string v = "graph_gate_paper_rule";
+  const auto traj = t::expect_plot(dir, "nlos_uwb_trajectory");
+  EXPECT_EQ(static_cast<double>(traj.at(v + ", left-out epochs").size()), row.at("epochs_left_out").get<double>());
+  EXPECT_GT(traj.at("UWB anchors").size(), 0u);
+  const auto err = t::expect_plot(dir, "nlos_uwb_error_time");
+  const auto& e = err.at(v + " 2-D error");
+  EXPECT_EQ(static_cast<double>(e.size()), row.at("count").get<double>());
+  EXPECT_NEAR(t::rms_y(e), row.at("rmse_h_m").get<double>(), t::six_digits(row.at("rmse_h_m")));
+  EXPECT_NEAR(t::max_y(e), row.at("max_h_m").get<double>(), t::six_digits(row.at("max_h_m")));
+  if (err.count("left-out epochs")) {
+    for (const auto& p : err.at("left-out epochs")) EXPECT_NE(std::find(e.begin(), e.end(), p), e.end()) << p.first;
+  }
+  const auto cdf = t::expect_plot(dir, "nlos_uwb_error_cdf");
+  for (const char* name : {"graph_gate_paper_rule", "least_squares", "graph", "graph_paper_rule", "ekf_gate_paper_rule"}) {
+    ASSERT_TRUE(cdf.count(name)) << name;
+    EXPECT_EQ(static_cast<double>(cdf.at(name).size()), doc.at("nlos_uwb").at("positioning").at(name).at("count").get<double>()) << name;
   }
 }

@@ -1,16 +1,20 @@
 // `ctxfuse run gins`: usage errors name the problem (exit 2), a folder without the recording's
 // files is a runtime error (exit 1); on the real drive (skipped without it) the trajectory CSV,
-// scored again here with the outage protocol, gives the JSON's figure.
+// scored again here with the outage protocol, gives the JSON's figure; --plot writes its three
+// plots, whose data agree with the JSON's outage scores.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "cli/plot_data.hpp"
 #include "ctxfuse/eval/gins_outages.hpp"
 #include "support/data_dir.hpp"
 #include "support/run_cli.hpp"
@@ -92,6 +96,63 @@ TEST(CliRunGins, OutagesOnTheRealDriveCsvAndJsonAgree) {
   const auto again = ctxfuse::eval::outage_errors(traj, ctxfuse::eval::rtk_fixed_reference(rec_fixes), windows);
   // Stamps to the ms (the fixes' own resolution) and 1e-10 deg (1e-5 m): the same figure.
   EXPECT_NEAR(again.rms, smoothed, 1e-4);
+  fs::remove_all(tmp);
+}
+
+TEST(CliRunGins, PlotsAgreeWithTheOutageScores) {
+  CTXFUSE_REQUIRE_DATA(dir, "gnss-imu-drive");
+  CTXFUSE_REQUIRE_GNUPLOT();
+  namespace t = ctxfuse::test;
+  const fs::path tmp = fs::temp_directory_path() / ("ctxfuse_run_gins_plot_" + std::to_string(::getpid()));
+  fs::remove_all(tmp);
+  fs::create_directories(tmp);
+  const fs::path plots = tmp / "plots";
+  const auto r = run("run gins --data \"" + dir.string() + "\"" + kDrive + " --outage 15:45:40 --gnss-rate 1 --constraints zupt,nhc --smooth --json \"" +
+                     (tmp / "m.json").string() + "\" --plot \"" + plots.string() + "\"");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("plots in " + plots.string() + ": gins_trajectory.png gins_error_time.png gins_outage_error.png"), std::string::npos)
+      << r.out;
+  std::ifstream js(tmp / "m.json");
+  const nlohmann::json doc = nlohmann::json::parse(js);
+
+  const auto traj = t::expect_plot(plots, "gins_trajectory");
+  for (const char* s : {"forward", "smoothed", "RTK reference (Q=1)"}) EXPECT_GT(traj.count(s) ? traj.at(s).size() : 0u, 100u) << s;
+  // Every RTK-fixed epoch inside a window is marked, scored or not (before the alignment).
+  const auto& fwd = doc.at("forward");
+  ASSERT_TRUE(traj.count("reference inside outages"));
+  EXPECT_EQ(traj.at("reference inside outages").size(), fwd.at("epochs").get<std::size_t>() + fwd.at("unscored_epochs").get<std::size_t>());
+
+  // The errors marked inside outages are the ones the scores aggregate.
+  const auto err = t::expect_plot(plots, "gins_error_time");
+  const auto per = t::expect_plot(plots, "gins_outage_error");
+  for (const std::string pass : {"forward", "smoothed"}) {
+    const auto& sc = doc.at(pass);
+    ASSERT_TRUE(err.count(pass + " error inside outages")) << pass;
+    const auto& inside = err.at(pass + " error inside outages");
+    EXPECT_EQ(inside.size(), sc.at("epochs").get<std::size_t>()) << pass;
+    EXPECT_NEAR(t::rms_y(inside), sc.at("rms_m").get<double>(), t::six_digits(sc.at("rms_m"))) << pass;
+    EXPECT_NEAR(t::max_y(inside), sc.at("max_m").get<double>(), t::six_digits(sc.at("max_m"))) << pass;
+    const auto& all = err.at(pass + " horizontal error");
+    const auto& sigma = err.at(pass + " 1-sigma horizontal");
+    EXPECT_GT(all.size(), inside.size()) << pass;
+    EXPECT_EQ(sigma.size(), all.size()) << pass;
+    EXPECT_TRUE(std::all_of(sigma.begin(), sigma.end(), [](const auto& p) { return p.second > 0.0 && std::isfinite(p.second); }));
+    // One row per outage with a scored epoch, at the window's number, with the JSON's figures.
+    const auto& rms = per.at(pass + " RMS");
+    const auto& max = per.at(pass + " max");
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < sc.at("outages").size(); ++i) {
+      const auto& o = sc.at("outages")[i];
+      if (o.at("epochs").get<int>() == 0) continue;
+      ASSERT_LT(k, rms.size()) << pass;
+      EXPECT_EQ(rms[k].first, static_cast<double>(i + 1)) << pass;
+      EXPECT_NEAR(rms[k].second, o.at("rms_m").get<double>(), t::six_digits(o.at("rms_m"))) << pass << " outage " << i + 1;
+      EXPECT_NEAR(max[k].second, o.at("max_m").get<double>(), t::six_digits(o.at("max_m"))) << pass << " outage " << i + 1;
+      ++k;
+    }
+    EXPECT_EQ(rms.size(), k) << pass;
+    EXPECT_EQ(k, doc.at("outages_scored").get<std::size_t>()) << pass;
+  }
   fs::remove_all(tmp);
 }
 

@@ -1,10 +1,14 @@
 // `ctxfuse run uwb` end to end on one Hanyang case (real data; skipped without it): the
 // trajectory CSV (time_ns,x,y,z, one row per estimate) scored again here with the authors'
-// protocol gives the JSON's figure; the JSON names a leave-one-out split; usage errors.
+// protocol gives the JSON's figure; the JSON names a leave-one-out split; usage errors; --plot
+// writes its three plots, whose data agree with the JSON.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cctype>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -12,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/plot_data.hpp"
 #include "ctxfuse/eval/hanyang_protocol.hpp"
 #include "support/data_dir.hpp"
 #include "support/run_cli.hpp"
@@ -76,4 +81,68 @@ TEST(CliRunUwb, UsageAndInputErrors) {
   EXPECT_EQ(no_ranges.code, 1);
   EXPECT_NE(no_ranges.err.find("A<id>.csv"), std::string::npos) << no_ranges.err;
   fs::remove_all(empty);
+}
+
+TEST(CliRunUwb, PlotsAgreeWithTheMetrics) {
+  CTXFUSE_REQUIRE_DATA(dir, "uwb-outdoor-hanyang/Dynamic_measurements/NLOS/Trajectory_A/Case_1");
+  CTXFUSE_REQUIRE_GNUPLOT();
+  namespace t = ctxfuse::test;
+  const fs::path tmp = fs::temp_directory_path() / ("ctxfuse_run_uwb_plot_" + std::to_string(::getpid()));
+  fs::remove_all(tmp);
+  fs::create_directories(tmp);
+  const fs::path plots = tmp / "plots";
+  // The paper's epoch rule: it leaves whole epochs out, which the plots mark.
+  const auto r = run("run uwb --data \"" + dir.string() + "\" --policy paper --json \"" + (tmp / "m.json").string() + "\" --plot \"" +
+                     plots.string() + "\"");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("plots in " + plots.string() + ": uwb_trajectory.png uwb_error_time.png uwb_error_cdf.png"), std::string::npos)
+      << r.out;
+  std::ifstream js(tmp / "m.json");
+  const nlohmann::json doc = nlohmann::json::parse(js);
+  const std::string v = doc.at("trajectory_variant");
+  ASSERT_EQ(v, "ekf_gate_paper_rule");
+
+  // Plan view: every estimate, the left-out epochs on their own; one point per anchor file.
+  const auto traj = t::expect_plot(plots, "uwb_trajectory");
+  const auto& left = traj.at(v + ", left-out epochs");
+  const auto& attached = traj.at(v + ", epochs with ranges attached");
+  EXPECT_EQ(static_cast<double>(left.size()), doc.at("epochs_left_out").at(v).get<double>());
+  EXPECT_GT(left.size(), 0u);
+  EXPECT_EQ(static_cast<double>(left.size() + attached.size()), doc.at("estimates").get<double>());
+  std::size_t anchor_files = 0;
+  for (const auto& f : fs::directory_iterator(dir)) {
+    const std::string name = f.path().filename().string();
+    anchor_files += name.size() > 5 && name[0] == 'A' && name.ends_with(".csv") && std::isdigit(static_cast<unsigned char>(name[1]));
+  }
+  EXPECT_EQ(traj.at("UWB anchors").size(), anchor_files);
+  EXPECT_GT(traj.at("reference").size(), 100u);
+
+  // Error over time: the protocol's errors, whose RMS is the JSON's; the marked left-out
+  // epochs are points of that curve.
+  const auto err = t::expect_plot(plots, "uwb_error_time");
+  const auto& e = err.at(v + " 2-D error");
+  const double rmse = doc.at("rmse_2d_m").at(v);
+  EXPECT_NEAR(t::rms_y(e), rmse, t::six_digits(rmse));
+  ASSERT_TRUE(err.count("left-out epochs"));
+  const auto& marked = err.at("left-out epochs");
+  EXPECT_GT(marked.size(), 0u);
+  EXPECT_LE(marked.size(), left.size());
+  for (const auto& p : marked) EXPECT_NE(std::find(e.begin(), e.end(), p), e.end()) << p.first;
+
+  // CDF: the same errors sorted; the authors' ESKF, scored here from their ESKF.csv, gives
+  // the figure of their RMSD_results.txt (4 decimals there).
+  const auto cdf = t::expect_plot(plots, "uwb_error_cdf");
+  const auto& c = cdf.at(v);
+  ASSERT_EQ(c.size(), e.size());
+  EXPECT_TRUE(std::is_sorted(c.begin(), c.end()));
+  EXPECT_DOUBLE_EQ(c.back().second, 1.0);
+  double sum = 0.0;
+  for (const auto& p : c) sum += p.first * p.first;
+  EXPECT_NEAR(std::sqrt(sum / static_cast<double>(c.size())), rmse, t::six_digits(rmse));
+  ASSERT_TRUE(cdf.count("authors' ESKF"));
+  double eskf = 0.0;
+  for (const auto& p : cdf.at("authors' ESKF")) eskf += p.first * p.first;
+  eskf = std::sqrt(eskf / static_cast<double>(cdf.at("authors' ESKF").size()));
+  EXPECT_NEAR(eskf, doc.at("authors_rmse_2d_m").at("ESKF").get<double>(), 1e-3);
+  fs::remove_all(tmp);
 }

@@ -5,16 +5,20 @@
 // steps beside the paper's Table 5 (the reference numbers are bench_per_sample's, in
 // docs/benchmarks.md).
 #include <chrono>
+#include <cmath>
 #include <initializer_list>
 #include <cstdio>
 #include <map>
 #include <memory>
 #include <ostream>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "cli/error_report.hpp"
 #include "cli/plot.hpp"
 #include "cli/registry.hpp"
+#include "cli/uwb_plots.hpp"
 #include "ctxfuse/classify/dempster_shafer.hpp"
 #include "ctxfuse/eval/nlos_uwb_sim.hpp"
 
@@ -59,6 +63,43 @@ constexpr PaperPositioning kPaperPos[] = {{"imu_only", "IMU only", 6.941, 17.147
                                           {"graph_gate_per_range", "", 0, 0, 0},
                                           {"ekf_gate_paper_rule", "", 0, 0, 0},
                                           {"ekf_gate", "", 0, 0, 0}};
+
+/// 2-D error against the truth of each estimate (time order); NaN outside the truth's span.
+std::vector<double> errors_2d(std::span<const eval::TimedPosition> est, std::span<const sim::TruthSample> truth) {
+  const auto a = eval::align_to_truth(est, truth);
+  std::vector<double> out(est.size(), std::nan(""));
+  for (std::size_t i = 0, k = 0; i < est.size() && k < a.t.size(); ++i)
+    if (est[i].t == a.t[k]) out[i] = a.errors[k++].head<2>().norm();
+  return out;
+}
+
+// --plot: the gated graph with the paper's rule (the report keeps its whole run) against the
+// truth, scored over the section's span like its table row; the CDF beside LS, the graph
+// without and with the rule (ungated), and the gated EKF.
+void plot_section(const sim::Drive& d, const eval::NlosSimReport& r, Plotter& plotter) {
+  UwbPlots p;
+  p.prefix = "nlos_uwb";
+  p.estimator = "graph_gate_paper_rule";
+  p.reference_label = "truth";
+  p.time_label = "drive time [s]";
+  for (std::size_t k = 0; k < d.truth.size(); k += 10)
+    if (d.truth[k].t >= r.span_start && d.truth[k].t <= r.span_end) p.reference.push_back(d.truth[k].position.head<2>());
+  p.anchors = r.anchors;
+  std::vector<eval::TimedPosition> est;
+  for (const auto& e : r.proposed.estimates) est.push_back({e.t, Eigen::Vector3d(e.position.x(), e.position.y(), 0.0)});
+  const auto errors = errors_2d(est, d.truth);
+  for (std::size_t i = 0; i < est.size(); ++i) {
+    const auto& e = r.proposed.estimates[i];
+    const bool in_span = e.t >= r.span_start && e.t <= r.span_end;
+    p.estimates.push_back({e.t, e.position, e.epoch_attached, in_span ? errors[i] : std::nan("")});
+  }
+  for (const char* name : {"least_squares", "graph", "graph_paper_rule", "ekf_gate_paper_rule"}) {
+    auto h = errors_2d(r.variant(name).estimates, d.truth);
+    std::erase_if(h, [](double e) { return std::isnan(e); });
+    p.other_errors.emplace_back(name, std::move(h));
+  }
+  plot_uwb(plotter, p);
+}
 
 void nlos_uwb_section(const DemoContext& ctx, Json& json, std::ostream& out) {
   const eval::NlosSimReport& r = study_for(*ctx.drive);
@@ -113,25 +154,9 @@ void nlos_uwb_section(const DemoContext& ctx, Json& json, std::ostream& out) {
     if (p.paper[0]) j["paper_rmse_max_std_m"] = numbers({p.rmse, p.max, p.std});
   }
   out << "  paper's proposed error CDF east/north at 50/70/90 %: 0.222/0.754, 0.385/0.955, 0.589/1.205 m\n";
-  if (!ctx.plotter) return;
-  const sim::Drive& d = *ctx.drive;
-  Plotter::Series truth{"truth", {}, true}, est{"graph + paper rule", {}, false}, anchors{"UWB anchors", {}, false};
-  const double t0 = r.span_start, t1 = r.span_end;
-  for (std::size_t k = 0; k < d.truth.size(); k += 10)
-    if (d.truth[k].t >= t0 && d.truth[k].t <= t1) truth.points.emplace_back(d.truth[k].position.head<2>());
-  const auto& prop = r.variant("graph_paper_rule");
-  for (const auto& e : prop.estimates) est.points.emplace_back(e.position.head<2>());
-  anchors.points = r.anchors;
-  ctx.plotter->trajectory("nlos_uwb_trajectory", "NLOS UWB protocol: truth, graph with the paper's rule, anchors", {truth, est, anchors});
-  std::vector<std::pair<std::string, std::vector<double>>> cdf;
-  for (const char* name : {"least_squares", "graph", "graph_paper_rule", "ekf_gate_paper_rule"}) {
-    const auto a = eval::align_to_truth(r.variant(name).estimates, d.truth);
-    std::vector<double> h;
-    for (const auto& e : a.errors) h.push_back(e.head<2>().norm());
-    cdf.emplace_back(name, std::move(h));
-  }
-  ctx.plotter->error_cdf("nlos_uwb_error_cdf", "NLOS UWB protocol: 2-D error CDF", cdf);
+  if (ctx.plotter) plot_section(*ctx.drive, r, *ctx.plotter);
 }
+
 
 /// Mean wall time per call of f over `n` calls, in microseconds.
 template <class F>

@@ -41,6 +41,13 @@ class Plotter {
   bool available() const { return available_; }
   const std::filesystem::path& dir() const { return dir_; }
   const std::vector<std::filesystem::path>& written() const { return written_; }
+  /// "plots in DIR: a.png b.png" on one line; nothing when no plot was written.
+  void print_written(std::ostream& out) const {
+    if (written_.empty()) return;
+    out << "plots in " << dir_.string() << ":";
+    for (const auto& p : written_) out << ' ' << p.filename().string();
+    out << '\n';
+  }
 
   /// Plan view (east/north, metres, equal axes) of several trajectories, e.g. truth first.
   bool trajectory(const std::string& name, const std::string& title, const std::vector<Series>& series) {
@@ -61,10 +68,10 @@ class Plotter {
     return plot(name, title, "error [m]", "cumulative probability", "set yrange [0:1]\nset key bottom right\n", series);
   }
 
-  /// Any x/y line plot (e.g. error against time).
+  /// Any x/y plot (e.g. error against time); `extra` is gnuplot set-up (e.g. "set logscale y\n").
   bool xy(const std::string& name, const std::string& title, const std::string& xlabel, const std::string& ylabel,
-          const std::vector<Series>& series) {
-    return plot(name, title, xlabel, ylabel, "", series);
+          const std::vector<Series>& series, const std::string& extra = "") {
+    return plot(name, title, xlabel, ylabel, extra, series);
   }
 
  private:
@@ -78,16 +85,20 @@ class Plotter {
   }
 
   bool plot(const std::string& name, const std::string& title, const std::string& xlabel, const std::string& ylabel,
-            const std::string& extra, const std::vector<Series>& series) {
+            const std::string& extra, const std::vector<Series>& all) {
+    // An empty series is left out: gnuplot stops on a plot whose data set has no point.
+    std::vector<const Series*> series;
+    for (const auto& s : all)
+      if (!s.points.empty()) series.push_back(&s);
     if (!available_ || series.empty()) return false;
     const auto dat = dir_ / (name + ".dat");
     const auto gp = dir_ / (name + ".gp");
     const auto png = dir_ / (name + ".png");
     {
       std::ofstream d(dat);
-      for (const auto& s : series) {
-        d << "# " << s.label << '\n';
-        for (const auto& p : s.points) d << p.x() << ' ' << p.y() << '\n';
+      for (const Series* s : series) {
+        d << "# " << s->label << '\n';
+        for (const auto& p : s->points) d << p.x() << ' ' << p.y() << '\n';
         d << "\n\n";  // gnuplot data-set separator (index)
       }
       std::ofstream g(gp);
@@ -98,8 +109,8 @@ class Plotter {
         << "set grid\n" << extra << "plot ";
       for (std::size_t i = 0; i < series.size(); ++i) {
         if (i) g << ", \\\n     ";
-        g << quote(dat.string()) << " index " << i << " using 1:2 with " << (series[i].lines ? "lines lw 2" : "points pt 7 ps 0.5")
-          << " title " << quote(series[i].label);
+        g << quote(dat.string()) << " index " << i << " using 1:2 with " << (series[i]->lines ? "lines lw 2" : "points pt 7 ps 0.5")
+          << " title " << quote(series[i]->label);
       }
       g << '\n';
       if (!d || !g) {

@@ -20,6 +20,7 @@
 #include "cli/json.hpp"
 #include "cli/options.hpp"
 #include "cli/progress.hpp"
+#include "cli/run_gins_plots.hpp"
 #include "cli/run_registry.hpp"
 #include "ctxfuse/eval/gins_outages.hpp"
 
@@ -220,8 +221,9 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
     st[k] = std::move(a);
   }
   doc["static_start"] = std::move(st);
+  eval::GinsOutageScores sc;
   if (!res.windows.empty()) {
-    const auto sc = eval::score_outages(rec.fixes, res);
+    sc = eval::score_outages(rec.fixes, res);
     out << formatted("  outages %zu (%zu scored, %zu RTK-fixed epochs, %zu before the alignment): horizontal error RMS / max\n",
                      res.windows.size(), sc.outages_scored, sc.forward.epochs, sc.forward.unscored);
     out << formatted("    forward   %7.3f / %7.3f m\n", sc.forward.rms, sc.forward.max);
@@ -238,6 +240,11 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
   }
   if (!in.out_csv.empty() && !write_csv(in.out_csv, o.smooth ? res.smoothed : res.forward, err)) return 1;
   if (!in.json.empty() && !write_json_file(doc, in.json, "run gins", err)) return 1;
+  if (!in.plot.empty()) {
+    Plotter plotter(in.plot, err);
+    if (plotter.available()) plot_gins(plotter, rec.fixes, res, sc);
+    plotter.print_written(out);
+  }
   return 0;
 }
 

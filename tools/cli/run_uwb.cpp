@@ -6,12 +6,14 @@
 // cases of the same dataset (never on CASE_DIR). --out writes the chosen variant's trajectory:
 // time_ns,x,y,z, one row per estimate (z is the tag's fixed height). Parsing and formatting
 // only: the runs and scores are eval::evaluate_nlos_uwb_case.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <memory>
 #include <ostream>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -19,6 +21,7 @@
 #include "cli/json.hpp"
 #include "cli/options.hpp"
 #include "cli/run_registry.hpp"
+#include "cli/uwb_plots.hpp"
 #include "ctxfuse/eval/nlos_uwb.hpp"
 
 namespace ctxfuse::cli {
@@ -65,6 +68,57 @@ bool write_trajectory(const std::string& path, const pipelines::nlos_uwb::Track&
     return false;
   }
   return true;
+}
+
+/// The authors' protocol error of each estimate alone (NaN outside the scored span): the same
+/// numbers as the variant's RMSE, which aggregates them.
+std::vector<double> protocol_errors(std::span<const eval::TimedPoint2> est, std::span<const io::HanyangReferencePose> ref,
+                                    const eval::HanyangSpan& span) {
+  std::vector<double> out;
+  out.reserve(est.size());
+  for (const auto& e : est) out.push_back(eval::hanyang_rmse_2d(std::span(&e, 1), ref, span).rmse_2d);
+  return out;
+}
+
+std::vector<double> scored(std::vector<double> errors) {
+  std::erase_if(errors, [](double e) { return std::isnan(e); });
+  return errors;
+}
+
+// --plot: the chosen variant against the reference; beside its CDF the paper's pipeline, the
+// gate alone, LS, and the authors' ESKF (their ESKF.csv) when the case has it.
+void plot_case(const std::string& dir, const eval::NlosUwbCaseReport& rep, const std::string& chosen, const std::filesystem::path& case_dir,
+               std::ostream& out, std::ostream& err) {
+  Plotter plotter(dir, err);
+  if (plotter.available()) {
+    const auto span = eval::trajectory_a_span();
+    const auto ref = io::read_hanyang_reference(case_dir);
+    const auto& track = rep.variant(chosen).track;
+    UwbPlots p;
+    p.prefix = "uwb";
+    p.estimator = chosen;
+    for (const auto& r : ref)
+      if (std::abs(r.position.z()) < span.max_abs_z) p.reference.push_back(r.position.head<2>());
+    std::vector<int> ids;
+    for (const auto& rec : track.ranges)
+      if (std::find(ids.begin(), ids.end(), rec.range.anchor_id) == ids.end()) {
+        ids.push_back(rec.range.anchor_id);
+        p.anchors.push_back(rec.range.anchor_position.head<2>());
+      }
+    const auto errors = protocol_errors(eval::timed_points(track), ref, span);
+    for (std::size_t i = 0; i < track.estimates.size(); ++i) {
+      const auto& e = track.estimates[i];
+      p.estimates.push_back({e.t, e.position, e.epoch_attached, errors[i]});
+    }
+    p.t0 = track.estimates.empty() ? 0.0 : track.estimates.front().t;
+    p.time_label = "time since the first estimate [s]";
+    for (const char* name : {"ekf_gate_paper_rule", "ekf_gate", "least_squares"})
+      if (name != chosen) p.other_errors.emplace_back(name, scored(protocol_errors(eval::timed_points(rep.variant(name).track), ref, span)));
+    if (std::filesystem::exists(case_dir / "ESKF.csv"))
+      p.other_errors.emplace_back("authors' ESKF", scored(protocol_errors(eval::read_hanyang_estimates(case_dir / "ESKF.csv"), ref, span)));
+    plot_uwb(plotter, p);
+  }
+  plotter.print_written(out);
 }
 
 int run_uwb(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::ostream& err) {
@@ -119,6 +173,14 @@ int run_uwb(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::os
   doc["identification"]["ds"] = identification_json(id.ds);
   if (!in.out_csv.empty() && !write_trajectory(in.out_csv, track, settings.tag_height_m, err)) return 1;
   if (!in.json.empty() && !write_json_file(doc, in.json, "run uwb", err)) return 1;
+  if (!in.plot.empty()) {
+    try {
+      plot_case(in.plot, rep, chosen, in.data_dir, out, err);
+    } catch (const std::exception& e) {
+      err << "ctxfuse run uwb: plots: " << e.what() << '\n';
+      return 1;
+    }
+  }
   return 0;
 }
 
