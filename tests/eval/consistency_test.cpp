@@ -70,12 +70,9 @@ Outcome monte_carlo(int runs, int steps, double true_psd, double assumed_psd) {
   sim::Rng rng(20261123);
   auto normal4 = [&] { return test::standard_normal<4>(rng); };
   for (int r = 0; r < runs; ++r) {
-    Gaussian<4> prior;
-    prior.mean << 0.0, 0.0, 1.0, -0.5;
-    prior.cov = prior_sd.cwiseProduct(prior_sd).asDiagonal();
-    // The truth is drawn from the filter's prior, so the first error is N(0, P0) as assumed.
-    Vector<4> x = prior.mean + prior_sd.cwiseProduct(normal4());
-    Ekf<Cv> f(filter_model, prior);
+    const auto start = test::draw_start(Vector<4>(0.0, 0.0, 1.0, -0.5), prior_sd, rng);
+    Vector<4> x = start.truth;
+    Ekf<Cv> f(filter_model, start.prior);
     for (int k = 0; k < steps; ++k) {
       x = truth_model.predict(x, {}, dt, nullptr) + Q_chol * normal4();
       EXPECT_TRUE(f.predict({}, dt).accepted());

@@ -43,12 +43,9 @@ reliability::Verdict monte_carlo(double filter_psd_factor) {
   for (int r = 0; r < runs; ++r) {
     sim::Rng rng(20261201u + static_cast<std::uint64_t>(r));
     auto normal4 = [&] { return reliability::standard_normal<4>(rng); };
-    Gaussian<4> prior;
-    prior.mean << 0.0, 5.0, 1.0, 0.5;
-    prior.cov = prior_sd.cwiseProduct(prior_sd).asDiagonal();
-    // The truth is drawn from the filter's prior: the first error is N(0, P0) as assumed.
-    Vector<4> x = prior.mean + prior_sd.cwiseProduct(normal4());
-    Ekf<Cv> f(assumed, prior);
+    const auto start = test::draw_start(Vector<4>(0.0, 5.0, 1.0, 0.5), prior_sd, rng);
+    Vector<4> x = start.truth;
+    Ekf<Cv> f(assumed, start.prior);
     for (int k = 0; k < epochs; ++k) {
       x = truth.predict(x, {}, dt, nullptr) + Q_chol * normal4();
       EXPECT_TRUE(f.predict({}, dt).accepted());

@@ -74,11 +74,9 @@ reliability::Verdict monte_carlo(double filter_psd_factor) {
   for (int r = 0; r < runs; ++r) {
     sim::Rng rng(20261204u + static_cast<std::uint64_t>(r));
     auto normal4 = [&] { return reliability::standard_normal<4>(rng); };
-    Gaussian<4> prior;
-    prior.mean << 0.0, 5.0, 1.0, 0.5;
-    prior.cov = prior_sd.cwiseProduct(prior_sd).asDiagonal();
-    Vector<4> x = prior.mean + prior_sd.cwiseProduct(normal4());  // the first error is N(0, P0)
-    EXPECT_TRUE(smoother->initialise(0.0, prior).accepted());
+    const auto start = test::draw_start(Vector<4>(0.0, 5.0, 1.0, 0.5), prior_sd, rng);
+    Vector<4> x = start.truth;
+    EXPECT_TRUE(smoother->initialise(0.0, start.prior).accepted());
     for (int k = 0; k < epochs; ++k) {
       x = truth.predict(x, {}, dt, nullptr) + Q_chol * normal4();
       Smoother::Measurements m;

@@ -86,14 +86,12 @@ ImmOutcome monte_carlo(double q_factor) {
   for (int r = 0; r < runs; ++r) {
     sim::Rng rng(20261203u + static_cast<std::uint64_t>(r));
     auto normal4 = [&] { return reliability::standard_normal<4>(rng); };
-    Gaussian<4> prior;
-    prior.mean << 0.0, 0.0, 2.0, 1.0;
-    prior.cov = prior_sd.cwiseProduct(prior_sd).asDiagonal();
-    Vector<4> x = prior.mean + prior_sd.cwiseProduct(normal4());
+    const auto start = test::draw_start(Vector<4>(0.0, 0.0, 2.0, 1.0), prior_sd, rng);
+    Vector<4> x = start.truth;
     imm::ImmOptions<2> options;
     options.prior_weights = imm::PriorWeights::predicted;
     auto f = imm::Imm(policies::FixedTransition<2>(policies::sticky_transition<2>(stay)),
-                      hana::make_tuple(imm::make_mode(filter_quiet), imm::make_mode(filter_manoeuvre)), prior,
+                      hana::make_tuple(imm::make_mode(filter_quiet), imm::make_mode(filter_manoeuvre)), start.prior,
                       Vector<2>(0.9, 0.1), options);
     int settled_index = 0;
     for (int k = 0; k < epochs; ++k) {

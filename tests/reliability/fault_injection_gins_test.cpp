@@ -6,8 +6,8 @@
 //  - evidence: the replay report's drop counts equal the touched messages (stamps, dropouts,
 //    duplicates, order), the pass refused every touched value (PassCounts::imu_refused,
 //    gnss_refused), or the gate refused at least one fix (jumps);
-//  - the belief finite, its covariance symmetric positive definite at every epoch the pass
-//    records (every GNSS fix once aligned: the prior and posterior of each);
+//  - the belief finite, its covariance symmetric positive definite after every step the pass
+//    takes once aligned (each IMU propagation, each IMU sample's constraints, each fix);
 //  - recovery: from recovery_s after the fault is over, for window_s, the horizontal error at
 //    every epoch within twice the larger of the clean run's 95th percentile and the clean
 //    run's error at that epoch.
@@ -113,24 +113,44 @@ bool finite(const State& x) {
       x.values);
 }
 
+using Pass = gins::ForwardPass<gins::Nav20>;
+
+/// The pass as the replay's handler, its belief checked after every step it takes once aligned.
+struct CheckedPass {
+  Pass& pass;
+  BeliefChecks& checks;
+  void check() {
+    if (pass.aligned()) checks.check(finite(pass.belief().nominal), pass.belief().cov);
+  }
+  void propagate(const io::ImuSample& u, double dt) {
+    pass.propagate(u, dt);
+    check();
+  }
+  template <class Msg>
+    requires requires(Pass& p, const Msg& m) { p.on(m); }
+  void on(const Msg& m) {
+    pass.on(m);
+    check();
+  }
+};
+
 /// The forward pass over the streams up to the end of the latest check window (the pass is
 /// causal: nothing after it changes what is checked).
 RunOutcome run(const Fault* f) {
   RunOutcome out;
   const gins::Settings s;
   const gins::RunOptions opt;
-  gins::ForwardPass<gins::Nav20> pass(s, opt.installation, opt.constraints, {}, opt.gnss_rate_hz);
+  Pass pass(s, opt.installation, opt.constraints, {}, opt.gnss_rate_hz);
+  CheckedPass checked{pass, out.checks};
   const double stop = kT0 + kFault + 10.0 + recovery_s + window_s + 2.0;
   const auto imu = before(sim_drive().imu, stop);
   const auto fixes = before(sim_drive().fixes, stop);
-  out.replay = f ? io::replay_tampered(pass, FaultTamper(*f), imu, fixes) : io::replay_tampered(pass, io::NoTamper{}, imu, fixes);
+  out.replay = f ? io::replay_tampered(checked, FaultTamper(*f), imu, fixes) : io::replay_tampered(checked, io::NoTamper{}, imu, fixes);
   pass.finish();
   out.counts = pass.counts();
   out.aligned = pass.aligned();
-  for (const auto& r : pass.recorder().records()) {
-    out.checks.check(finite(r.posterior.nominal), r.posterior.cov);
+  for (const auto& r : pass.recorder().records())
     out.epochs.push_back({r.t, gins::trajectory_row<gins::Nav20>(r.t, r.posterior, pass.gnss_lever()).llh});
-  }
   return out;
 }
 
@@ -165,6 +185,8 @@ void check_fault(const Fault& f) {
   ASSERT_TRUE(out.aligned);
   EXPECT_TRUE(out.checks.clean()) << "non-finite " << out.checks.non_finite << ", asymmetric " << out.checks.asymmetric
                                   << ", not PD " << out.checks.not_pd << " of " << out.checks.checked;
+  // Checked after every propagation at least (the pass counts each that advanced the filter).
+  EXPECT_GE(out.checks.checked, out.counts.imu_steps);
   const bool imu = f.stream == StreamId::imu;
   const std::size_t n = imu ? in_window(sim_drive().imu, f.begin, f.end) : in_window(sim_drive().fixes, f.begin, f.end);
   const io::StreamReport& rep = imu ? out.replay.imu : out.replay.streams[0];

@@ -23,6 +23,7 @@
 #include "ctxfuse/filters/eskf.hpp"
 #include "ctxfuse/filters/rts.hpp"
 #include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/models/held_input.hpp"
 #include "ctxfuse/models/ins_augment.hpp"
 #include "ctxfuse/models/ins_input.hpp"
 #include "ctxfuse/models/ins_motion.hpp"
@@ -101,13 +102,11 @@ class ForwardPass {
     close_epoch();
     models::BodyIncrements inc;
     // A refused sample (non-finite, absurd) is replaced by the last accepted one over its
-    // interval, as the replay does for a sample that never came: time and covariance advance.
-    if (imu_.from_rates(u.gyro, u.accel, dt, inc).accepted()) {
-      last_imu_ = u;
-    } else {
-      ++counts_.imu_refused;
-      if (!last_imu_ || !imu_.from_rates(last_imu_->gyro, last_imu_->accel, dt, inc).accepted()) return;
-    }
+    // interval (models/held_input.hpp): time and covariance advance.
+    const models::InputUse use =
+        held_imu_.apply(u, [&](const io::ImuSample& s) { return imu_.from_rates(s.gyro, s.accel, dt, inc); });
+    if (use != models::InputUse::taken) ++counts_.imu_refused;
+    if (use == models::InputUse::lost) return;
     SquareMatrix<Model::dim> F;
     const Status st = eskf::predict(model_, belief_, inc, dt, {}, &F);
     if (!st.accepted()) {
@@ -212,6 +211,8 @@ class ForwardPass {
   void finish() { close_epoch(); }
 
   bool aligned() const { return aligned_; }
+  /// The filter's belief now (meaningful once aligned).
+  const B& belief() const { return belief_; }
   double alignment_time() const { return align_t_; }
   const PassCounts& counts() const { return counts_; }
   const StaticStats& static_start() const { return start_; }
@@ -340,7 +341,7 @@ class ForwardPass {
   ChiSquareGate gate_;
   Model model_{};
   models::ImuInput imu_;
-  std::optional<io::ImuSample> last_imu_;  // the last sample propagate() accepted
+  models::HeldInput<io::ImuSample> held_imu_;
   models::DynamicAlignment align_;
   models::GnssGeodeticPosition<S> gnss_;
   models::GnssVelocity<S> gnss_velocity_;

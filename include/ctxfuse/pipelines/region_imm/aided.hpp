@@ -26,6 +26,7 @@
 
 #include "ctxfuse/core/status.hpp"
 #include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/models/held_input.hpp"
 #include "ctxfuse/pipelines/region_imm/models.hpp"
 #include "ctxfuse/pipelines/region_imm/settings.hpp"
 
@@ -44,7 +45,7 @@ struct Track {
   // filters that take UWB only).
   int integrity_faults = 0;
   // IMU propagations whose sample the filter refused (non-finite or absurd rates): each was
-  // propagated with the last accepted sample instead (Aided::predict says why).
+  // propagated with the last accepted sample instead (models/held_input.hpp says why).
   std::size_t rejected_imu = 0;
   // Speed samples whose vehicle constraint no taker accepted: a non-finite speed under the
   // speed update (refused), or a constraint every taker gated.
@@ -102,16 +103,10 @@ class Aided {
         for (auto& h : health_) h.recovered();
         if (whole_) whole_->recovered();
       }
-    if (core_.predict(u, dt).accepted()) {
-      last_input_ = u;
-      return;
-    }
-    // A refused sample is replaced by the last accepted one, as its dropout would be: the
-    // replay holds each sample over the interval after its stamp, so a dropped sample's
-    // interval is covered by the previous sample. Skipping the interval instead would lose the
-    // motion over it (v dt a step: 12 m after 5 s of NaN samples at 2.5 m/s).
-    ++track_.rejected_imu;
-    if (last_input_) (void)core_.predict(*last_input_, dt);
+    // A refused sample is replaced by the last accepted one, as its dropout would be
+    // (models/held_input.hpp says why).
+    const auto step = [&](const models::PlanarImu& x) { return core_.predict(x, dt); };
+    if (held_input_.apply(u, step) != models::InputUse::taken) ++track_.rejected_imu;
   }
 
   void speed(const io::SpeedSample& v) {
@@ -188,7 +183,7 @@ class Aided {
   std::optional<FilterHealth> whole_ = Core::kWhole ? std::optional<FilterHealth>(FilterHealth(s_)) : std::nullopt;
   UwbIntegrity integrity_;
   std::optional<io::GnssFix> last_fix_;
-  std::optional<models::PlanarImu> last_input_;  // the last IMU input the filter accepted
+  models::HeldInput<models::PlanarImu> held_input_;
   Track track_;
 };
 
