@@ -3,8 +3,8 @@
 // sample that never came is covered by the sample before it. A sample that came but is refused
 // (non-finite, absurd rates) is treated the same way: its interval is propagated with the last
 // accepted input. Skipping the interval instead loses the motion over it (v dt per step: 12 m
-// after 5 s of NaN samples at 2.5 m/s on the region pipeline's drive). Every IMU-driven pipeline
-// (region_imm's Aided, gins' ForwardPass) applies its inputs through this one rule.
+// after 5 s of NaN samples at 2.5 m/s on the region pipeline's drive). region_imm's Aided and
+// gins' ForwardPass apply their IMU inputs through this one rule.
 #pragma once
 
 #include <optional>
