@@ -60,8 +60,7 @@ TEST(CliRunGins, UsageErrorsNameTheProblem) {
 
 TEST(CliRunGins, OutagesOnTheRealDriveCsvAndJsonAgree) {
   CTXFUSE_REQUIRE_DATA(dir, "gnss-imu-drive");
-  const fs::path tmp = fs::temp_directory_path() / ("ctxfuse_run_gins_" + std::to_string(::getpid()));
-  fs::create_directories(tmp);
+  const fs::path tmp = ctxfuse::test::scratch_dir("run_gins");
   const auto r = run("run gins --data \"" + dir.string() + "\"" + kDrive +
                      " --outage 15:45:40 --gnss-rate 1 --constraints zupt,nhc --smooth --out \"" + (tmp / "traj.csv").string() +
                      "\" --json \"" + (tmp / "m.json").string() + "\"");
@@ -103,9 +102,7 @@ TEST(CliRunGins, PlotsAgreeWithTheOutageScores) {
   CTXFUSE_REQUIRE_DATA(dir, "gnss-imu-drive");
   CTXFUSE_REQUIRE_GNUPLOT();
   namespace t = ctxfuse::test;
-  const fs::path tmp = fs::temp_directory_path() / ("ctxfuse_run_gins_plot_" + std::to_string(::getpid()));
-  fs::remove_all(tmp);
-  fs::create_directories(tmp);
+  const fs::path tmp = t::scratch_dir("run_gins_plot");
   const fs::path plots = tmp / "plots";
   const auto r = run("run gins --data \"" + dir.string() + "\"" + kDrive + " --outage 15:45:40 --gnss-rate 1 --constraints zupt,nhc --smooth --json \"" +
                      (tmp / "m.json").string() + "\" --plot \"" + plots.string() + "\"");

@@ -31,8 +31,7 @@ ctxfuse::test::CliRun run(const std::string& args) { return ctxfuse::test::run_c
 
 TEST(CliRunUwb, TrajectoryAndMetricsOfOneCase) {
   CTXFUSE_REQUIRE_DATA(dir, "uwb-outdoor-hanyang/Dynamic_measurements/NLOS/Trajectory_A/Case_1");
-  const fs::path tmp = fs::temp_directory_path() / ("ctxfuse_run_uwb_" + std::to_string(::getpid()));
-  fs::create_directories(tmp);
+  const fs::path tmp = ctxfuse::test::scratch_dir("run_uwb");
   const auto r = run("run uwb --data \"" + dir.string() + "\" --out \"" + (tmp / "traj.csv").string() + "\" --json \"" +
                      (tmp / "metrics.json").string() + "\"");
   ASSERT_EQ(r.code, 0) << r.err;
@@ -87,9 +86,7 @@ TEST(CliRunUwb, PlotsAgreeWithTheMetrics) {
   CTXFUSE_REQUIRE_DATA(dir, "uwb-outdoor-hanyang/Dynamic_measurements/NLOS/Trajectory_A/Case_1");
   CTXFUSE_REQUIRE_GNUPLOT();
   namespace t = ctxfuse::test;
-  const fs::path tmp = fs::temp_directory_path() / ("ctxfuse_run_uwb_plot_" + std::to_string(::getpid()));
-  fs::remove_all(tmp);
-  fs::create_directories(tmp);
+  const fs::path tmp = t::scratch_dir("run_uwb_plot");
   const fs::path plots = tmp / "plots";
   // The paper's epoch rule: it leaves whole epochs out, which the plots mark.
   const auto r = run("run uwb --data \"" + dir.string() + "\" --policy paper --json \"" + (tmp / "m.json").string() + "\" --plot \"" +

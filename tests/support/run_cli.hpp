@@ -25,6 +25,17 @@ struct CliRun {
 
 enum class Stderr { merged, separate };
 
+/// An empty scratch folder for one test, named by `name` and the process id: ctest runs test
+/// cases in parallel processes (and several build trees may test at once), so a fixed name
+/// would let one test rewrite another's files.
+inline std::filesystem::path scratch_dir(const std::string& name) {
+  namespace fs = std::filesystem;
+  const fs::path p = fs::temp_directory_path() / ("ctxfuse_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(p);
+  fs::create_directories(p);
+  return p;
+}
+
 /// Runs `ctxfuse <args>` through the shell (args are pasted in as they are).
 inline CliRun run_cli(const std::string& args, Stderr mode = Stderr::merged) {
   namespace fs = std::filesystem;
