@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -31,15 +32,6 @@ struct LocalPlane {
     return {std::remainder(lon - lon0, 2.0 * 3.14159265358979323846) * per(1), (lat - lat0) * per(0)};
   }
 };
-
-/// The outage protocol's horizontal error of `traj` at one reference epoch (NaN outside the
-/// trajectory's span): eval::outage_errors over that epoch alone, in a window holding only it,
-/// so the plotted errors are the very numbers the scores aggregate.
-inline double protocol_error_at(std::span<const eval::TimedLatLon> traj, const eval::TimedLatLon& ref) {
-  const pipelines::gins::OutageWindow w{ref.t, std::nextafter(ref.t, std::numeric_limits<double>::infinity())};
-  const auto e = eval::outage_errors(traj, std::span<const eval::TimedLatLon>(&ref, 1), std::span(&w, 1));
-  return e.epochs == 1 ? e.max : std::nan("");
-}
 
 /// 1-sigma horizontal [m] of the trajectory at t, interpolated between its rows.
 inline double sigma_horizontal_at(std::span<const pipelines::gins::TrajectoryRow> rows, double t) {
@@ -91,8 +83,10 @@ inline void plot_gins(Plotter& plotter, std::span<const io::GnssFix> fixes, cons
     Series all{std::string(p.name) + " horizontal error", {}, true}, inside{std::string(p.name) + " error inside outages", {}, false},
         sigma{std::string(p.name) + " 1-sigma horizontal", {}, true};
     for (const auto& r : ref) {
-      const double e = protocol_error_at(ll, r);
-      if (std::isnan(e)) continue;
+      // The error the outage scores aggregate (eval::horizontal_error_at).
+      const std::optional<double> err = eval::horizontal_error_at(ll, r);
+      if (!err) continue;
+      const double e = *err;
       all.points.emplace_back(r.t - t0, e);
       if (in_outage(r.t)) inside.points.emplace_back(r.t - t0, e);
       sigma.points.emplace_back(r.t - t0, sigma_horizontal_at(*p.rows, r.t));

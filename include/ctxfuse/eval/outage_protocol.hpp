@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -66,6 +67,17 @@ struct OutageErrors {
   double rms = 0.0, max = 0.0;
 };
 
+/// Horizontal error [m] of the trajectory, interpolated to a reference epoch's time, at that
+/// epoch; nothing outside the trajectory's span.
+inline std::optional<double> horizontal_error_at(std::span<const TimedLatLon> traj, const TimedLatLon& ref) {
+  TimedLatLon est;
+  if (!interpolate(traj, ref.t, est)) return std::nullopt;
+  const Eigen::Vector3d per = earth::ned_per_llh(ref.lat, 0.0);
+  const double dn = (est.lat - ref.lat) * per(0);
+  const double de = std::remainder(est.lon - ref.lon, 2.0 * 3.14159265358979323846) * per(1);
+  return std::sqrt(dn * dn + de * de);
+}
+
 /// Horizontal error [m] of the trajectory at every reference epoch inside a window.
 inline OutageErrors outage_errors(std::span<const TimedLatLon> traj, std::span<const TimedLatLon> reference,
                                   std::span<const pipelines::gins::OutageWindow> windows) {
@@ -76,18 +88,14 @@ inline OutageErrors outage_errors(std::span<const TimedLatLon> traj, std::span<c
     double s2 = 0.0;
     for (const auto& ref : reference) {
       if (!w.contains(ref.t)) continue;
-      TimedLatLon est;
-      if (!interpolate(traj, ref.t, est)) {
+      const std::optional<double> err = horizontal_error_at(traj, ref);
+      if (!err) {
         ++r.unscored;
         continue;
       }
-      const Eigen::Vector3d per = earth::ned_per_llh(ref.lat, 0.0);
-      const double dn = (est.lat - ref.lat) * per(0);
-      const double de = std::remainder(est.lon - ref.lon, 2.0 * 3.14159265358979323846) * per(1);
-      const double err2 = dn * dn + de * de;
-      s2 += err2;
+      s2 += *err * *err;
       ++e.epochs;
-      e.max = std::max(e.max, std::sqrt(err2));
+      e.max = std::max(e.max, *err);
     }
     e.rms = e.epochs ? std::sqrt(s2 / static_cast<double>(e.epochs)) : 0.0;
     sum2 += s2;
