@@ -75,8 +75,7 @@ bool write_trajectory(const std::string& path, const pipelines::nlos_uwb::Track&
 std::vector<double> protocol_errors(std::span<const eval::TimedPoint2> est, std::span<const io::HanyangReferencePose> ref,
                                     const eval::HanyangSpan& span) {
   std::vector<double> out;
-  out.reserve(est.size());
-  for (const auto& e : est) out.push_back(eval::hanyang_rmse_2d(std::span(&e, 1), ref, span).rmse_2d);
+  eval::hanyang_rmse_2d(est, ref, span, &out);
   return out;
 }
 

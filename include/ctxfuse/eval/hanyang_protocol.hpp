@@ -57,10 +57,11 @@ struct ProtocolRmse {
   double t_begin = std::nan(""), t_end = std::nan("");
 };
 
-/// The authors' 2-D RMSE of `estimates` (time order) against `reference`. Throws
+/// The authors' 2-D RMSE of `estimates` (time order) against `reference`; with `errors`, also
+/// each estimate's own 2-D error, the numbers the RMSE aggregates (NaN outside the span). Throws
 /// std::invalid_argument when the span's gates are never passed or no reference sample is kept.
 inline ProtocolRmse hanyang_rmse_2d(std::span<const TimedPoint2> estimates, std::span<const io::HanyangReferencePose> reference,
-                                    const HanyangSpan& span) {
+                                    const HanyangSpan& span, std::vector<double>* errors = nullptr) {
   std::size_t i0 = 0;
   while (i0 < reference.size() && !span.start.contains(reference[i0].position)) ++i0;
   std::size_t i1 = i0 + 1;
@@ -76,7 +77,9 @@ inline ProtocolRmse hanyang_rmse_2d(std::span<const TimedPoint2> estimates, std:
   out.t_end = reference[i1].t;
   double sq = 0.0;
   std::size_t j = 0;
-  for (const auto& e : estimates) {
+  if (errors) errors->assign(estimates.size(), std::nan(""));
+  for (std::size_t k = 0; k < estimates.size(); ++k) {
+    const TimedPoint2& e = estimates[k];
     if (e.t < out.t_begin || e.t > out.t_end) continue;
     Eigen::Vector2d ref;
     if (e.t <= kept.front().t) {
@@ -88,7 +91,9 @@ inline ProtocolRmse hanyang_rmse_2d(std::span<const TimedPoint2> estimates, std:
       const double a = (e.t - kept[j].t) / (kept[j + 1].t - kept[j].t);
       ref = (1.0 - a) * kept[j].position.head<2>() + a * kept[j + 1].position.head<2>();
     }
-    sq += (e.p - ref).squaredNorm();
+    const double e2 = (e.p - ref).squaredNorm();
+    if (errors) (*errors)[k] = std::sqrt(e2);
+    sq += e2;
     ++out.scored;
   }
   if (out.scored > 0) out.rmse_2d = std::sqrt(sq / static_cast<double>(out.scored));
