@@ -4,9 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <random>
+#include <string>
 
 #include "classify_svm/svm_test_data.hpp"
 #include "ctxfuse/classify/svm.hpp"
@@ -252,6 +255,56 @@ TEST(SvmRbfKernel, ExponentialOfScaledDistanceMatchesLibmToAFewUlp) {
     }
     EXPECT_LT(worst, 4 * std::numeric_limits<double>::epsilon()) << "gamma " << gamma;
     EXPECT_EQ(exp_neg_gamma(0.0, e), 1.0) << "gamma " << gamma;
+  }
+}
+
+// The same bound on every compiled block variant (the vector ones use their own table and
+// polynomial), kernel values only: one feature column c with x = 0, so d2 = c * c as the block
+// rounds it; the clamp is crossed too.
+TEST(SvmRbfKernel, EveryCompiledVariantMatchesLibmToAFewUlp) {
+  using namespace ctxfuse::classify::svm_detail;
+  constexpr int n = kRbfBlock;
+  std::mt19937_64 rng(14);
+  for (const double gamma : {0.5, 1.0 / 3.0, 7.3, 1e-3, 123.4}) {
+    const RbfExp e = rbf_exp_constants(gamma);
+    std::uniform_real_distribution<double> u(0.0, std::sqrt(1.05 * e.d2_max));
+    std::array<double, n> column{}, out{};
+    std::array<double, 3> worst{};
+    for (int round = 0; round < 400; ++round) {
+      for (int i = 0; i < n; ++i)
+        column[static_cast<std::size_t>(i)] = round == 0 ? std::sqrt(1e-3 * i / gamma) : u(rng);
+      const auto check = [&](int variant) {
+        for (int i = 0; i < n; ++i) {
+          const auto k = static_cast<std::size_t>(i);
+          const double d2 = std::min(column[k] * column[k], e.d2_max);
+          const double t = -gamma * d2;
+          const double t_lo = std::fma(-gamma, d2, -t);
+          const double ref = std::exp(t) * (1.0 + t_lo);
+          auto& w = worst[static_cast<std::size_t>(variant)];
+          w = std::max(w, std::abs(out[k] - ref) / ref);
+        }
+      };
+      rbf_block_baseline<1>({column.data()}, {0.0}, e, out.data());
+      check(0);
+#ifdef CTXFUSE_SVM_RUNTIME_AVX2
+      if (cpu_has_avx2_fma()) {
+        rbf_block_avx2<1>({column.data()}, {0.0}, e, out.data());
+        check(1);
+      }
+      if (cpu_has_avx512f()) {
+        rbf_block_avx512<1>({column.data()}, {0.0}, e, out.data());
+        check(2);
+      }
+#endif
+    }
+    const char* names[] = {"baseline", "avx2", "avx512"};
+    for (std::size_t v = 0; v < worst.size(); ++v)
+      EXPECT_LT(worst[v], 4 * std::numeric_limits<double>::epsilon()) << names[v] << " gamma " << gamma;
+    // The worst errors in eps per variant, in the test's XML output (--gtest_output=xml).
+    RecordProperty("worst_eps_gamma_" + std::to_string(gamma),
+                   std::to_string(worst[0] / std::numeric_limits<double>::epsilon()) + " " +
+                       std::to_string(worst[1] / std::numeric_limits<double>::epsilon()) + " " +
+                       std::to_string(worst[2] / std::numeric_limits<double>::epsilon()));
   }
 }
 
