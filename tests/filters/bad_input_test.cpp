@@ -1,12 +1,15 @@
 // Every rejection names its problem and leaves the belief bit-for-bit unchanged.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <limits>
 
 #include "ctxfuse/filters/ekf.hpp"
 #include "ctxfuse/filters/eskf.hpp"
 #include "ctxfuse/models/ins.hpp"
+#include "ctxfuse/models/ins_augment.hpp"
+#include "ctxfuse/models/ins_nav.hpp"
 #include "ctxfuse/models/kinematic.hpp"
 #include "ctxfuse/models/linear.hpp"
 
@@ -193,6 +196,124 @@ TEST_F(EskfFixture, RejectsBadFixesAndLeavesStateUnchanged) {
   EXPECT_EQ(s.outcome, Outcome::gated);
   expect_unchanged(before);
   ASSERT_TRUE(eskf::update(model, gnss, belief, Vector<3>(1.1, 2, 3), ChiSquareGate(0.999)));
+}
+
+// The covariance prediction is the last step that can fail (after the nominal has been
+// propagated): an F P F' that overflows, or a NaN in Q, is refused and nothing is written.
+TEST_F(EskfFixture, RefusesANonFiniteCovariancePredictionAndLeavesStateUnchanged) {
+  models::ImuSample u;
+  u.accel = {0, 0, 9.81};
+  belief.cov = SquareMatrix<15>::Identity() * std::numeric_limits<double>::max();
+  const auto before = belief;
+  Status s = eskf::predict(model, belief, u, 0.01);
+  EXPECT_EQ(s.outcome, Outcome::numerical_failure);
+  EXPECT_EQ(s.problem, Problem::non_finite_covariance);
+  expect_unchanged(before);
+
+  belief.cov = SquareMatrix<15>::Identity() * 0.1;
+  const auto before_nan = belief;
+  model.gyro_noise_density = kNaN;
+  SquareMatrix<15> F_used = SquareMatrix<15>::Constant(7.0);
+  s = eskf::predict(model, belief, u, 0.01, {}, &F_used);
+  EXPECT_EQ(s.outcome, Outcome::invalid_input);
+  EXPECT_EQ(s.problem, Problem::process_noise_non_finite);
+  expect_unchanged(before_nan);
+  EXPECT_TRUE((F_used.array() == 7.0).all());  // F is handed out only on success
+}
+
+// The same for the augmented strapdown (its F and Q are built in place around the base's).
+struct AugmentedEskfFixture : ::testing::Test {
+  using Nav20 = models::Augmented<models::InsNavModel<models::FullStrapdown>, Block<"mount", 2>, Block<"lever", 3>>;
+  Nav20 model;
+  eskf::Belief<Nav20> belief;
+  models::BodyIncrements u;
+  void SetUp() override {
+    model.extra[0] = models::GaussMarkov{1e-3, 600.0};
+    auto& x = belief.nominal;
+    x.get<"p">() = Eigen::Vector3d(0.7, -1.5, 210.0);
+    x.get<"v">() = Eigen::Vector3d(8.0, -3.0, 0.2);
+    x.get<"theta">() = Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.2, -0.3, 1.0).normalized()));
+    x.get<"mount">() = Eigen::Vector2d(-0.05, 0.09);
+    x.get<"lever">() = Eigen::Vector3d(-1.2, 0.3, 0.6);
+    belief.cov = SquareMatrix<20>::Identity() * 0.1;
+    belief.cov(0, 3) = belief.cov(3, 0) = 0.02;
+    u.dtheta = Eigen::Vector3d(1e-4, -2e-4, 1e-3);
+    u.dv = Eigen::Vector3d(0.03, 0.01, -0.098);
+  }
+  void expect_unchanged(const eskf::Belief<Nav20>& before) const {
+    const auto& a = before.nominal;
+    const auto& b = belief.nominal;
+    EXPECT_TRUE(same_bytes(a.get<"p">(), b.get<"p">()));
+    EXPECT_TRUE(same_bytes(a.get<"v">(), b.get<"v">()));
+    EXPECT_TRUE(same_bytes(a.get<"theta">().coeffs(), b.get<"theta">().coeffs()));
+    EXPECT_TRUE(same_bytes(a.get<"bg">(), b.get<"bg">()));
+    EXPECT_TRUE(same_bytes(a.get<"ba">(), b.get<"ba">()));
+    EXPECT_TRUE(same_bytes(a.get<"mount">(), b.get<"mount">()));
+    EXPECT_TRUE(same_bytes(a.get<"lever">(), b.get<"lever">()));
+    EXPECT_TRUE(same_bytes(before.cov, belief.cov));
+  }
+};
+
+TEST_F(AugmentedEskfFixture, RejectedPredictionsLeaveTheBeliefUnchanged) {
+  const auto before = belief;
+  Status s = eskf::predict(model, belief, u, -0.01);
+  EXPECT_EQ(s.problem, Problem::non_positive_dt);
+  expect_unchanged(before);
+
+  models::BodyIncrements bad = u;
+  bad.dv(2) = kInf;
+  s = eskf::predict(model, belief, bad, 0.01);
+  EXPECT_EQ(s.problem, Problem::non_finite_input);
+  expect_unchanged(before);
+
+  Nav20 nan_base = model;
+  nan_base.base.accel_noise_density = kNaN;
+  s = eskf::predict(nan_base, belief, u, 0.01);
+  EXPECT_EQ(s.outcome, Outcome::invalid_input);
+  EXPECT_EQ(s.problem, Problem::process_noise_non_finite);
+  expect_unchanged(before);
+
+  Nav20 nan_extra = model;
+  nan_extra.extra[1].density = kNaN;  // the lever arm's variance (a random walk: density^2 dt)
+  s = eskf::predict(nan_extra, belief, u, 0.01);
+  EXPECT_EQ(s.problem, Problem::process_noise_non_finite);
+  expect_unchanged(before);
+
+  belief.cov = SquareMatrix<20>::Identity() * std::numeric_limits<double>::max();
+  const auto before_huge = belief;
+  s = eskf::predict(model, belief, u, 0.01);
+  EXPECT_EQ(s.outcome, Outcome::numerical_failure);
+  EXPECT_EQ(s.problem, Problem::non_finite_covariance);
+  expect_unchanged(before_huge);
+
+  belief.cov(19, 4) = belief.cov(4, 19) = kNaN;  // one NaN far from the diagonal
+  belief.cov.diagonal().setConstant(0.1);
+  const auto before_nan_cov = belief;
+  s = eskf::predict(model, belief, u, 0.01);
+  EXPECT_EQ(s.outcome, Outcome::numerical_failure);
+  EXPECT_EQ(s.problem, Problem::non_finite_covariance);
+  expect_unchanged(before_nan_cov);
+}
+
+// Every element of P+ finite although their sum is not (near the largest double): accepted, and
+// equal to F P F' + Q written out densely.
+TEST_F(AugmentedEskfFixture, AcceptsAHugeButFiniteCovariance) {
+  belief.cov = SquareMatrix<20>::Identity() * (0.25 * std::numeric_limits<double>::max());
+  const SquareMatrix<20> P = belief.cov;
+  const auto x0 = belief.nominal;
+  SquareMatrix<20> F;
+  const Status s = eskf::predict(model, belief, u, 0.01, {}, &F);
+  ASSERT_TRUE(s.accepted()) << describe(s.problem);
+  ASSERT_TRUE(belief.cov.allFinite());
+  EXPECT_TRUE(belief.cov == belief.cov.transpose());
+  const SquareMatrix<20> Q = model.noise(x0, u, 0.01);
+  const SquareMatrix<20> FP = F * P;
+  const SquareMatrix<20> expected = FP * F.transpose() + Q;
+  for (int j = 0; j < 20; ++j)
+    for (int i = j; i < 20; ++i)
+      EXPECT_LE(std::abs(belief.cov(i, j) - expected(i, j)),
+                1e-12 * std::sqrt(expected(i, i)) * std::sqrt(expected(j, j)))
+          << i << ", " << j;
 }
 
 TEST(BadInput, DescribeNamesEveryProblem) {

@@ -31,12 +31,14 @@ bool nominal_is_finite(const Model& model, const typename Model::State& x) {
 }  // namespace detail
 
 namespace detail {
-/// The prediction from `in` into `out`, which may not alias `in`; `out` is scratch that holds
-/// the predicted belief only when the status is accepted (an IMM predicts all its modes this
-/// way and commits them together).
+/// Every check and the whole prediction, written only to `nominal` and to the LOWER triangle
+/// of `cov_lower` (its strict upper triangle is left unspecified). Both hold the prediction
+/// only when the status is accepted; nothing of `in` is written, and `nominal` and
+/// `cov_lower` may not alias it.
 template <ErrorStateProcessModel Model>
-Status predict_into(const Model& model, const Belief<Model>& in, Belief<Model>& out, const typename Model::Input& u,
-                    double dt, const FilterOptions& opts, SquareMatrix<Model::dim>* F_used) {
+Status predict_lower(const Model& model, const Belief<Model>& in, typename Model::State& nominal,
+                     SquareMatrix<Model::dim>& cov_lower, const typename Model::Input& u, double dt,
+                     const FilterOptions& opts, SquareMatrix<Model::dim>* F_used) {
   constexpr int N = Model::dim;
   if (Problem p = check_dt(dt, opts); p != Problem::none) return Status::invalid(p);
   if (Problem p = check_input(u, opts); p != Problem::none) return Status::invalid(p);
@@ -46,28 +48,44 @@ Status predict_into(const Model& model, const Belief<Model>& in, Belief<Model>& 
   if (Problem p = check_process_noise(Q); p != Problem::none) return Status::invalid(p);
 
   SquareMatrix<N> F;
-  out.nominal = model.predict(in.nominal, u, dt, &F);
-  if (!nominal_is_finite(model, out.nominal)) return Status::failure(Problem::non_finite_prediction);
-  // Lower triangle of F P F' + Q, mirrored once.
-  ctxfuse::detail::propagate_covariance_lower<Model>(F, in.cov, out.cov);
-  add_lower(out.cov, Q);
-  symmetrize(out.cov);
-  if (!all_finite(out.cov)) {
+  nominal = model.predict(in.nominal, u, dt, &F);
+  if (!nominal_is_finite(model, nominal)) return Status::failure(Problem::non_finite_prediction);
+  // Lower triangle of F P F' + Q.
+  ctxfuse::detail::propagate_covariance_lower<Model>(F, in.cov, cov_lower);
+  if (!ctxfuse::detail::add_lower_all_finite(cov_lower, Q)) {
     const Problem p = diagnose_non_finite_prediction(Q, F);
     return p == Problem::process_noise_non_finite ? Status::invalid(p) : Status::failure(p);
   }
   if (F_used) *F_used = F;
   return Status{};
 }
+
+/// The prediction from `in` into `out`, which may not alias `in`; `out` is scratch that holds
+/// the predicted belief only when the status is accepted (an IMM predicts all its modes this
+/// way and commits them together).
+template <ErrorStateProcessModel Model>
+Status predict_into(const Model& model, const Belief<Model>& in, Belief<Model>& out, const typename Model::Input& u,
+                    double dt, const FilterOptions& opts, SquareMatrix<Model::dim>* F_used) {
+  const Status s = predict_lower(model, in, out.nominal, out.cov, u, dt, opts, F_used);
+  if (s.accepted()) symmetrize(out.cov);
+  return s;
+}
 }  // namespace detail
 
-/// Nominal propagation and error covariance prediction P+ = F P F' + Q.
+/// Nominal propagation and error covariance prediction P+ = F P F' + Q. Everything that can
+/// fail is computed into locals (the nominal and the lower triangle of P+, neither
+/// initialised first); the belief is written only once all of it has succeeded: the nominal,
+/// then the lower triangle, mirrored onto the upper one.
 template <ErrorStateProcessModel Model>
 Status predict(const Model& model, Belief<Model>& belief, const typename Model::Input& u, double dt,
                const FilterOptions& opts = {}, SquareMatrix<Model::dim>* F_used = nullptr) {
-  Belief<Model> next;
-  const Status s = detail::predict_into(model, belief, next, u, dt, opts, F_used);
-  if (s.accepted()) belief = next;
+  typename Model::State nominal;
+  SquareMatrix<Model::dim> cov_lower;
+  const Status s = detail::predict_lower(model, belief, nominal, cov_lower, u, dt, opts, F_used);
+  if (s.accepted()) {
+    belief.nominal = nominal;
+    ctxfuse::detail::assign_lower_mirrored(cov_lower, belief.cov);
+  }
   return s;
 }
 

@@ -4,12 +4,47 @@
 // caller's estimate: the filters commit the result only when the status is accepted.
 #pragma once
 
+#include <cmath>
+
 #include "ctxfuse/core/block_sparsity.hpp"
 #include "ctxfuse/core/numerics.hpp"
 #include "ctxfuse/core/status.hpp"
 #include "ctxfuse/core/types.hpp"
 
 namespace ctxfuse::detail {
+
+/// out += Q on the lower triangle (diagonal included); true when the lower triangle of the sum
+/// is finite. The strict upper triangle of neither is read (`out`'s may be uninitialised).
+template <int N>
+bool add_lower_all_finite(SquareMatrix<N>& out, const SquareMatrix<N>& Q) {
+  // The sum of all the elements is finite only when every element is (one Inf or NaN makes it
+  // Inf or NaN), so one add per element settles the usual case; only when the sum is not
+  // finite (a non-finite element, or finite ones near the largest double) are the elements
+  // tested one by one.
+  double total = 0.0;
+  static_for<N>([&](auto jc) {
+    constexpr int j = static_cast<int>(decltype(jc)::value);
+    auto seg = out.col(j).template segment<N - j>(j);
+    seg += Q.col(j).template segment<N - j>(j);
+    total += seg.sum();
+  });
+  if (std::isfinite(total)) return true;
+  for (int j = 0; j < N; ++j)
+    for (int i = j; i < N; ++i)
+      if (!std::isfinite(out(i, j))) return false;
+  return true;
+}
+
+/// dst = the symmetric matrix whose lower triangle is src's: the lower triangle copied by
+/// columns, then mirrored in place (src's strict upper triangle is not read).
+template <int N>
+void assign_lower_mirrored(const SquareMatrix<N>& src, SquareMatrix<N>& dst) {
+  static_for<N>([&](auto jc) {
+    constexpr int j = static_cast<int>(decltype(jc)::value);
+    dst.col(j).template segment<N - j>(j) = src.col(j).template segment<N - j>(j);
+  });
+  symmetrize(dst);
+}
 
 /// Lower triangle of F P F' (see congruence_lower: with a pattern, the block-lower part and
 /// the strict upper triangle untouched), block-sparse when the model declares

@@ -55,11 +55,12 @@ struct GaussMarkov {
 
 /// Discrete process noise of a strapdown INS over any error layout with blocks p, v, theta, bg
 /// and ba. White specific-force noise enters v directly and p through the half-step; isotropic
-/// noise is unchanged by the rotation to the navigation frame.
-template <class L>
-SquareMatrix<L::size> strapdown_noise(double accel_noise_density, double gyro_noise_density, const GaussMarkov& gyro_bias,
-                                      const GaussMarkov& accel_bias, double dt) {
-  SquareMatrix<L::size> Q = SquareMatrix<L::size>::Zero();
+/// noise is unchanged by the rotation to the navigation frame. Written into any writable
+/// L::size x L::size expression (an augmented model's top-left corner), zeros included.
+template <class L, class Derived>
+void strapdown_noise_into(double accel_noise_density, double gyro_noise_density, const GaussMarkov& gyro_bias,
+                          const GaussMarkov& accel_bias, double dt, Eigen::MatrixBase<Derived>& Q) {
+  Q.setZero();
   const double qa = accel_noise_density * accel_noise_density;
   L::template cov<"p">(Q).diagonal().setConstant(qa * dt * dt * dt / 3.0);
   L::template cov<"p", "v">(Q).diagonal().setConstant(qa * dt * dt / 2.0);
@@ -68,6 +69,13 @@ SquareMatrix<L::size> strapdown_noise(double accel_noise_density, double gyro_no
   L::template cov<"theta">(Q).diagonal().setConstant(gyro_noise_density * gyro_noise_density * dt);
   L::template cov<"bg">(Q).diagonal().setConstant(gyro_bias.variance(dt));
   L::template cov<"ba">(Q).diagonal().setConstant(accel_bias.variance(dt));
+}
+
+template <class L>
+SquareMatrix<L::size> strapdown_noise(double accel_noise_density, double gyro_noise_density, const GaussMarkov& gyro_bias,
+                                      const GaussMarkov& accel_bias, double dt) {
+  SquareMatrix<L::size> Q;
+  strapdown_noise_into<L>(accel_noise_density, gyro_noise_density, gyro_bias, accel_bias, dt, Q);
   return Q;
 }
 

@@ -7,7 +7,10 @@
 // so inject/difference/reset Jacobian follow from the blocks; the transition and reset block
 // patterns are the base's plus one diagonal (identity) block per extra block; F and Q are the
 // base's in the top-left corner and the Gauss-Markov decay and variance of each extra block on
-// its diagonal. An extra block with tau = infinity and zero density is a constant.
+// its diagonal. An extra block with tau = infinity and zero density is a constant. A base that
+// offers predict(x, u, dt, F) and noise(x, u, dt, Q) overloads writing into any writable
+// Eigen expression (InsNavModel does) fills the corner in place; otherwise its own F and Q are
+// copied in.
 #pragma once
 
 #include <array>
@@ -81,10 +84,15 @@ struct Augmented : BlockRetractionOf<typename detail::AugmentedStateOf<typename 
     if (!F) {
       set_base_part(out, base.predict(base_part(x), u, dt, nullptr));
     } else {
-      SquareMatrix<base_dim> Fb;
-      set_base_part(out, base.predict(base_part(x), u, dt, &Fb));
-      F->setZero();
-      F->template topLeftCorner<base_dim, base_dim>() = Fb;
+      auto corner = F->template topLeftCorner<base_dim, base_dim>();
+      if constexpr (requires { base.predict(base_part(x), u, dt, corner); }) {
+        set_base_part(out, base.predict(base_part(x), u, dt, corner));  // the base writes its F in place
+      } else {
+        SquareMatrix<base_dim> Fb;
+        set_base_part(out, base.predict(base_part(x), u, dt, &Fb));
+        corner = Fb;
+      }
+      zero_around_corner(*F);
     }
     ctxfuse::detail::static_for<extra_blocks>([&](auto e) {
       constexpr std::size_t b = base_blocks + e;
@@ -98,8 +106,13 @@ struct Augmented : BlockRetractionOf<typename detail::AugmentedStateOf<typename 
   }
 
   SquareMatrix<dim> noise(const State& x, const Input& u, double dt) const {
-    SquareMatrix<dim> Q = SquareMatrix<dim>::Zero();
-    Q.template topLeftCorner<base_dim, base_dim>() = base.noise(base_part(x), u, dt);
+    SquareMatrix<dim> Q;
+    auto corner = Q.template topLeftCorner<base_dim, base_dim>();
+    if constexpr (requires { base.noise(base_part(x), u, dt, corner); })
+      base.noise(base_part(x), u, dt, corner);  // the base writes its Q in place
+    else
+      corner = base.noise(base_part(x), u, dt);
+    zero_around_corner(Q);
     ctxfuse::detail::static_for<extra_blocks>([&](auto e) {
       constexpr std::size_t b = base_blocks + e;
       Q.template block<ErrorLayout::sizes[b], ErrorLayout::sizes[b]>(ErrorLayout::offsets[b], ErrorLayout::offsets[b])
@@ -109,6 +122,12 @@ struct Augmented : BlockRetractionOf<typename detail::AugmentedStateOf<typename 
     return Q;
   }
 
+ private:
+  // Everything outside the base's top-left corner (the extra blocks' diagonals are set after).
+  static void zero_around_corner(SquareMatrix<dim>& M) {
+    M.template topRightCorner<base_dim, dim - base_dim>().setZero();
+    M.template bottomRows<dim - base_dim>().setZero();
+  }
 };
 
 }  // namespace ctxfuse::models

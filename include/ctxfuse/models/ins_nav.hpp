@@ -114,6 +114,28 @@ struct InsNavModel : BlockRetractionOf<NavState> {
   /// earth rate / earth radius, ~1e-11 /s per metre, and 2 g / R ~ 3e-6 /s^2 on the height):
   /// they matter over hours, not over GNSS outages of seconds to minutes.
   State predict(const State& x, const Input& u, double dt, SquareMatrix<dim>* F) const {
+    return step(x, u, dt, F);
+  }
+  /// The same with F written into any writable dim x dim expression (an augmented model's
+  /// top-left corner, models/ins_augment.hpp), zeros included.
+  template <class Derived>
+  State predict(const State& x, const Input& u, double dt, Eigen::MatrixBase<Derived>& F) const {
+    return step(x, u, dt, &F);
+  }
+
+  SquareMatrix<dim> noise(const State&, const Input&, double dt) const {
+    return strapdown_noise<ErrorLayout>(accel_noise_density, gyro_noise_density, gyro_bias, accel_bias, dt);
+  }
+  /// The same written into any writable dim x dim expression, zeros included.
+  template <class Derived>
+  void noise(const State&, const Input&, double dt, Eigen::MatrixBase<Derived>& Q) const {
+    strapdown_noise_into<ErrorLayout>(accel_noise_density, gyro_noise_density, gyro_bias, accel_bias, dt, Q);
+  }
+
+ private:
+  // FOut: SquareMatrix<dim> or any writable dim x dim Eigen expression; nullptr for no F.
+  template <class FOut>
+  State step(const State& x, const Input& u, double dt, FOut* F) const {
     using L = ErrorLayout;
     const Eigen::Vector3d& llh = x.get<"p">();
     const Eigen::Vector3d& v = x.get<"v">();
@@ -194,11 +216,6 @@ struct InsNavModel : BlockRetractionOf<NavState> {
     }
     return out;
   }
-
-  SquareMatrix<dim> noise(const State&, const Input&, double dt) const {
-    return strapdown_noise<ErrorLayout>(accel_noise_density, gyro_noise_density, gyro_bias, accel_bias, dt);
-  }
-
 };
 
 }  // namespace ctxfuse::models
