@@ -11,6 +11,8 @@
 
 #include "ctxfuse/pipelines/nlos_uwb/classifier.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/policies.hpp"
+#include "ctxfuse/pipelines/nlos_uwb/run.hpp"
+#include "ctxfuse/pipelines/nlos_uwb/smoother.hpp"
 
 namespace nu = ctxfuse::pipelines::nlos_uwb;
 
@@ -202,6 +204,44 @@ TEST(NlosUwbEstimator, SmootherRefusesAnEpochAtItsOwnTimeUnchanged) {
   EXPECT_EQ(st[0].outcome, ctxfuse::Outcome::gated);
   EXPECT_DOUBLE_EQ(sm.time(), 10.1);
 }
+
+// The run loop starts an estimator from the snapshot fix of an epoch's ranges; those ranges are
+// then in the prior, so the loop does not update with them again. One epoch of four exact
+// ranges (within 3 ms, as a real recording stamps them): the estimate is the fix itself, the
+// epoch counts as attached through the fix and no range as a factor update. The second epoch
+// is fused as usual.
+template <class Estimator>
+void start_epoch_is_the_fix() {
+  const nu::Settings s;
+  const std::array<Eigen::Vector2d, 4> anchors{Eigen::Vector2d(0, 0), Eigen::Vector2d(30, 0), Eigen::Vector2d(30, 30),
+                                               Eigen::Vector2d(0, 30)};
+  const Eigen::Vector2d p(12.0, 17.0);
+  std::vector<ctxfuse::io::UwbRange> stream;
+  for (int k = 0; k < 2; ++k)
+    for (int a = 0; a < 4; ++a) {
+      ctxfuse::io::UwbRange r;
+      r.t = 5.0 + 0.1 * k + 0.001 * a;
+      r.anchor_id = a;
+      r.anchor_position << anchors[static_cast<std::size_t>(a)], s.tag_height_m;  // tag and anchors level
+      r.range_m = (p - anchors[static_cast<std::size_t>(a)]).norm();
+      stream.push_back(r);
+    }
+  const auto fix = nu::best_snapshot_fix(std::span(stream).first(4), s, 3.0 * s.range_sigma_m);
+  ASSERT_TRUE(fix.ok());
+  const nu::Track t = nu::run(stream, Estimator(s), nu::NoNlosHandling{}, nu::NlosClassifier(s), s);
+  ASSERT_EQ(t.estimates.size(), 2u);
+  EXPECT_EQ(t.starts, 1u);
+  EXPECT_EQ(t.epochs_attached, 2u);
+  EXPECT_EQ(t.ranges_attached, 4u);  // the second epoch's only
+  EXPECT_EQ(t.ranges_accepted, 4u);
+  EXPECT_TRUE(t.estimates[0].epoch_attached);
+  EXPECT_EQ(t.estimates[0].position, fix.position);  // no update moved it
+  for (std::size_t i = 0; i < 4; ++i) EXPECT_FALSE(t.ranges[i].attached) << i;
+  EXPECT_NEAR((t.estimates[1].position - p).norm(), 0.0, 1e-3);
+}
+
+TEST(NlosUwbRun, StartEpochRangesAreNotUsedTwiceEkf) { start_epoch_is_the_fix<nu::RangeEkf<>>(); }
+TEST(NlosUwbRun, StartEpochRangesAreNotUsedTwiceSmoother) { start_epoch_is_the_fix<nu::RangeSmoother<>>(); }
 
 TEST(NlosUwbEpochs, OneRangePerAnchorWithinTheWindow) {
   // Anchors 3, 5, 9, 12 within 3 ms; anchor 3 again 100 ms later; then 5 twice 10 ms apart (a

@@ -151,6 +151,8 @@ void nlos_uwb_section(const DemoContext& ctx, Json& json, std::ostream& out) {
     j["cdf_east_m"] = numbers({e.east_abs.at(50), e.east_abs.at(70), e.east_abs.at(90)});
     j["cdf_north_m"] = numbers({e.north_abs.at(50), e.north_abs.at(70), e.north_abs.at(90)});
     j["epochs_left_out"] = static_cast<double>(v.epochs_left_out);
+    j["ranges_gated"] = static_cast<double>(v.ranges_gated);
+    j["restarts"] = static_cast<double>(v.restarts);
     if (p.paper[0]) j["paper_rmse_max_std_m"] = numbers({p.rmse, p.max, p.std});
   }
   out << "  paper's proposed error CDF east/north at 50/70/90 %: 0.222/0.754, 0.385/0.955, 0.589/1.205 m\n";

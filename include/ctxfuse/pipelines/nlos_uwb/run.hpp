@@ -125,9 +125,11 @@ class EpochProcessor {
 
   void operator()(std::span<const io::UwbRange> epoch) {
     ++track_.epochs;
+    bool started_here = false;
     if (!est_.started()) {
       const auto fix = best_snapshot_fix(epoch, settings_, 3.0 * settings_.range_sigma_m);
-      if (fix.ok() && est_.start(epoch.front().t, fix.position, fix.cov).accepted()) ++track_.starts;
+      started_here = fix.ok() && est_.start(epoch.front().t, fix.position, fix.cov).accepted();
+      track_.starts += started_here ? 1 : 0;
     }
     double speed = 0.0;
     if (est_.started()) {
@@ -147,6 +149,17 @@ class EpochProcessor {
     if constexpr (!kUsesRanges<Estimator>) {
       if (est_.predict_to(epoch.back().t).accepted()) track_.estimates.push_back({est_.time(), est_.position(), false});
       ++track_.epochs_left_out;
+      return;
+    }
+    if (started_here) {
+      // The start's fix was computed from this epoch's ranges: they are in the prior already,
+      // and updating with them again would count their information twice. The epoch is
+      // attached through the fix; its ranges are not factor updates (no range counts).
+      if (!est_.predict_to(epoch.back().t).accepted()) {
+        est_.stop();
+        return;
+      }
+      emit(true);
       return;
     }
     policy_.select(std::span<const RangeVerdict>(verdicts.data(), epoch.size()), std::span<bool>(attach.data(), epoch.size()));
@@ -181,14 +194,19 @@ class EpochProcessor {
       est_.stop();
       return;
     }
-    (any ? track_.epochs_attached : track_.epochs_left_out) += 1;
-    if constexpr (requires(const Estimator& e) { e.output_time(); e.output_position(); })
-      track_.estimates.push_back({est_.output_time(), est_.output_position(), any});  // a fixed-lag estimate
-    else
-      track_.estimates.push_back({est_.time(), est_.position(), any});
+    emit(any);
   }
 
  private:
+  /// The epoch's estimate, counted as attached (a range or the start fix used) or left out.
+  void emit(bool attached) {
+    (attached ? track_.epochs_attached : track_.epochs_left_out) += 1;
+    if constexpr (requires(const Estimator& e) { e.output_time(); e.output_position(); })
+      track_.estimates.push_back({est_.output_time(), est_.output_position(), attached});  // a fixed-lag estimate
+    else
+      track_.estimates.push_back({est_.time(), est_.position(), attached});
+  }
+
   using SourceHealth = policies::SourceHealth;
   SourceHealth* health_of(int anchor) {
     for (int k = 0; k < health_used_; ++k)
