@@ -197,6 +197,54 @@ TEST(CliDemo, SummaryJsonAndSectionsNotBuilt) {
   EXPECT_EQ(run("demo --seed -3").code, 2);
 }
 
+// Papers B and D: the demo's scene_gins and phone_gins sections print the GNSS/INS study of the
+// demo's drive, the same numbers `ctxfuse gins-study` computes for that seed, beside the papers'.
+TEST(CliDemo, GinsSectionsAreTheStudyOfTheDemosDrive) {
+  const auto dir = scratch("demo_gins");
+  fs::create_directories(dir);
+  const auto demo = run("demo --seed 2 --json \"" + (dir / "demo.json").string() + "\"");
+  ASSERT_EQ(demo.code, 0) << demo.out;
+  const auto study = run("gins-study --seeds 2 --json \"" + (dir / "study.json").string() + "\"");
+  ASSERT_EQ(study.code, 0) << study.out;
+  EXPECT_NE(demo.out.find("Scene-adaptive GNSS/INS (paper B)"), std::string::npos) << demo.out;
+  EXPECT_NE(demo.out.find("131.52 / 669.86"), std::string::npos) << demo.out;
+  std::ifstream dj(dir / "demo.json"), sj(dir / "study.json");
+  const nlohmann::json d = nlohmann::json::parse(dj), st = nlohmann::json::parse(sj).at("per_seed").at(0);
+  // Every run of the study, found under its section's key, with the same errors and fix counts.
+  const std::pair<const char*, const char*> schemes[] = {{"(a)", "a_gnss_ins"}, {"(b)", "b_rts"}, {"(c)", "c_constraints"},
+                                                         {"(d)", "d_constraints_rts"}, {"(c')", "c_constraints_zihr"},
+                                                         {"(d')", "d_constraints_zihr_rts"}};
+  const std::pair<const char*, const char*> noises[] = {{"fixed", "fixed"}, {"scene (classifier)", "scene_classifier"}};
+  int compared = 0;
+  for (const auto& run_json : st.at("runs")) {
+    const std::string scheme = run_json.at("scheme"), noise = run_json.at("noise");
+    const auto prefix = scheme.substr(0, scheme.find(' '));
+    for (const auto& [sp, skey] : schemes) {
+      if (prefix != sp) continue;
+      for (const auto& [np, nkey] : noises) {
+        if (noise != np) continue;
+        const auto& row = d.at("phone_gins").at("schemes").at(skey).at(nkey);
+        for (const char* part : {"all", "with_gnss", "indoor"})
+          for (const char* stat : {"rms_m", "p67_m", "p75_m", "max_m"})
+            EXPECT_EQ(row.at(part).at(stat), run_json.at(part).at(stat)) << scheme << " " << noise << " " << part << " " << stat;
+        EXPECT_EQ(row.at("fixes_used"), run_json.at("fixes_used")) << scheme << " " << noise;
+        ++compared;
+      }
+    }
+    if (prefix == "(a)") {
+      const std::string key = noise == "fixed" ? "fixed" : noise == "scene (true)" ? "scene_true" : "scene_classifier";
+      EXPECT_EQ(d.at("scene_gins").at("gnss_ins").at(key).at("all").at("p67_m"), run_json.at("all").at("p67_m")) << noise;
+      ++compared;
+    }
+  }
+  EXPECT_EQ(compared, 6 * 2 + 3);
+  EXPECT_EQ(d.at("scene_gins").at("scene_accuracy"), st.at("scene_accuracy"));
+  EXPECT_EQ(d.at("phone_gins").at("false_static_share_odometer"), st.at("false_static_share_odometer"));
+  EXPECT_EQ(d.at("scene_gins").at("gnss_ins").at("fixed").at("paper_p67_m"), 11.23);
+  EXPECT_EQ(d.at("phone_gins").at("schemes").at("d_constraints_rts").at("paper_p75_m"), 7.09);
+  fs::remove_all(dir);
+}
+
 TEST(CliDemo, PlotsArePngFilesOrAClearMessage) {
   const auto dir = scratch("plots");
   const auto r = run("demo --seed 1 --plot \"" + dir.string() + "\" --json \"" + (dir / "demo.json").string() + "\"");

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "cli/formatted.hpp"
+#include "cli/gins_json.hpp"
 #include "cli/json.hpp"
 #include "cli/options.hpp"
 #include "cli/registry.hpp"
@@ -21,16 +22,6 @@
 
 namespace ctxfuse::cli {
 namespace {
-
-Json errors_json(const eval::HorizontalErrors& e) {
-  Json j;
-  j["n"] = static_cast<double>(e.n);
-  j["rms_m"] = e.rms;
-  j["p67_m"] = e.p67;
-  j["p75_m"] = e.p75;
-  j["max_m"] = e.max;
-  return j;
-}
 
 int gins_study(Args args, std::ostream& out, std::ostream& err) {
   CLI::App app = make_app(
@@ -55,15 +46,16 @@ int gins_study(Args args, std::ostream& out, std::ostream& err) {
     sim::DriveConfig cfg;
     cfg.seed = seed;
     const eval::GinsSimStudy st = eval::gins_sim_study(cfg);
-    out << formatted("\n=== seed %llu: %zu IMU samples, %zu fixes; scene classifier accuracy %.2f %%; IMU detector static "
-                     "while moving %.2f %% of moving samples\n",
+    out << formatted("\n=== seed %llu: %zu IMU samples, %zu fixes; scene classifier accuracy %.2f %%; static while moving: "
+                     "IMU detector %.2f %%, with the odometer %.2f %% of moving samples\n",
                      static_cast<unsigned long long>(seed), st.imu_samples, st.fixes, 100.0 * st.scene_accuracy,
-                     100.0 * st.false_static_share);
+                     100.0 * st.false_static_share, 100.0 * st.false_static_share_odometer);
     out << "  scheme                              | R                  | RMS     67 %    75 %    max     | RMS GNSS  RMS garage | fixes used/gated\n";
     Json j;
     j["seed"] = static_cast<double>(seed);
     j["scene_accuracy"] = st.scene_accuracy;
     j["false_static_share"] = st.false_static_share;
+    j["false_static_share_odometer"] = st.false_static_share_odometer;
     j["imu_samples"] = static_cast<double>(st.imu_samples);
     j["fixes"] = static_cast<double>(st.fixes);
     Json runs = Json::array();
@@ -74,11 +66,7 @@ int gins_study(Args args, std::ostream& out, std::ostream& err) {
       Json rj;
       rj["scheme"] = r.scheme.name;
       rj["noise"] = r.noise;
-      rj["all"] = errors_json(r.all);
-      rj["with_gnss"] = errors_json(r.with_gnss);
-      rj["indoor"] = errors_json(r.indoor);
-      rj["fixes_used"] = static_cast<double>(r.fixes_used);
-      rj["fixes_gated"] = static_cast<double>(r.fixes_gated);
+      add_gins_run_json(r, rj);
       rj["rts_bytes"] = static_cast<double>(r.rts_bytes);
       runs.push_back(std::move(rj));
       const std::string key = r.scheme.name + " | " + r.noise;
