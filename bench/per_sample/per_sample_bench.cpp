@@ -13,8 +13,9 @@
 //   PerSample/Fusion/SameWindow, PerSample/Ceres (the window of bench/fixed_lag/
 //   fixed_lag_window.hpp solved by our smoother and by Ceres' fastest solver there, sparse
 //   normal Cholesky, to the same solution), PerSample/Fusion/Stream (steady state),
-//   PerSample/Total/Epoch4: each of the epoch's 4 ranges through SVM + consistency + D-S + the
-//   eq. 8 decision, the paper's attach rule for the epoch, and the smoother step.
+//   PerSample/Total/Epoch4: each of the epoch's 4 ranges through the NLOS pipeline's classifier
+//   (pipelines/nlos_uwb/classifier.hpp: features, SVM + consistency + D-S + the eq. 8
+//   decision), its paper attach rule for the epoch (policies.hpp), and the smoother step.
 // Every benchmark checks its result before timing and reports an error instead of a time when
 // the check fails.
 #include <benchmark/benchmark.h>
@@ -30,6 +31,8 @@
 #include "ctxfuse/classify/consistency.hpp"
 #include "ctxfuse/classify/dempster_shafer.hpp"
 #include "ctxfuse/classify/svm.hpp"
+#include "ctxfuse/pipelines/nlos_uwb/classifier.hpp"
+#include "ctxfuse/pipelines/nlos_uwb/policies.hpp"
 #include "fixed_lag_window.hpp"
 #include "nlos_svm_model.hpp"
 
@@ -37,6 +40,7 @@ namespace {
 using namespace ctxfuse;
 using namespace ctxfuse::bench::fixed_lag_window;
 using ctxfuse::bench::NlosSvmBenchModel;
+namespace nu = ctxfuse::pipelines::nlos_uwb;
 constexpr int kRangesPerEpoch = 4;
 
 /// The model, or why there is none (training/loading failed, or ours and libsvm disagree).
@@ -210,62 +214,74 @@ void PerSample_Ceres(benchmark::State& state) {
   per_range_counter(state);
 }
 
-/// One epoch of the whole chain. The classifier's features come from the drive's own ranges:
-/// v_u = (r_k - r_{k-1}) / dt, v_i = the drive's speed. The attach rule's belief is the
-/// smallest max(R, 1 - R) of the epoch (the D-S confidence in each range's verdict).
+/// One epoch of the whole chain, through the NLOS pipeline's own pieces: each range through
+/// `pipelines::nlos_uwb::NlosClassifier` (its feature extractor: v_u = (r_k - r_{k-1}) / dt
+/// from the drive's own ranges, v_i = the drive's speed; SVM p1, consistency p2, D-S R, the
+/// eq. 8 decision) with the paper-sized model (the benchmark's standardisation as the model's
+/// input scaling), then `PaperEpochRule::select` for the epoch, as `pipelines::nlos_uwb::run`
+/// calls them.
 struct EpochChain {
-  const NlosSvmBenchModel& m = model();
-  classify::ConsistencyModel consistency{};
-  classify::NlosDecisionRule decide{};
-  classify::FactorAttachPolicy attach{};
+  nu::Settings settings{};
+  nu::NlosClassifier classifier{settings, pipeline_svm()};
+  nu::PaperEpochRule rule{classify::FactorAttachPolicy{settings.mixed_epoch_belief}};
   double speed = drive().start().mean[3];
-  classify::SvmPrediction<2> out;
-  std::array<double, kRangesPerEpoch> p1{}, R{};
+  std::array<nu::RangeVerdict, kRangesPerEpoch> verdicts{};
+  std::array<bool, kRangesPerEpoch> attach{};
 
-  /// The epoch's measurements, attached when the rule attaches the epoch (or always, with
-  /// attach_all: the classifiers still run, the step always fuses 4 ranges), unattached otherwise.
+  static nu::NlosSvm pipeline_svm() {
+    nu::NlosSvm svm = model().ours;
+    svm.input_mean = model().mean;
+    svm.input_std = model().stdev;
+    return svm;
+  }
+
+  /// The epoch's measurements, attached as the rule says (or all, with attach_all: the
+  /// classifiers still run, the step always fuses 4 ranges). Epochs come in time order.
   Smoother::Measurements classify(long k, bool attach_all = false) {
     const auto& now = drive().ranges[static_cast<std::size_t>(k % Drive::period)];
-    const auto& before = drive().ranges[static_cast<std::size_t>((k - 1) % Drive::period)];
-    int nlos = 0;
-    double belief = 1.0;
     for (std::size_t a = 0; a < kRangesPerEpoch; ++a) {
-      const double change = now[a] - before[a];
-      classify::svm_predict(m.ours, m.standardise(change / dt, speed), out);
-      p1[a] = out.probabilities[static_cast<std::size_t>(m.nlos_class())];
-      const double p2 = consistency.nlos_probability(change, speed * dt);
-      R[a] = classify::combine_probabilities(p1[a], p2).nlos_belief();
-      nlos += decide(R[a]);
-      belief = std::min(belief, std::max(R[a], 1.0 - R[a]));
+      io::UwbRange r;
+      r.t = static_cast<double>(k) * dt;
+      r.anchor_id = static_cast<int>(a);
+      r.range_m = now[a];
+      verdicts[a] = classifier.classify(r, speed);
     }
+    rule.select(verdicts, attach);
     Smoother::Measurements meas = drive().measurements(k);
-    if (!attach.attach(kRangesPerEpoch, nlos, belief) && !attach_all) meas.attached.fill(false);
+    if (!attach_all)
+      for (std::size_t a = 0; a < kRangesPerEpoch; ++a) meas.attached[a] = attach[a];
     return meas;
   }
 };
 
 void PerSample_Total_Epoch4(benchmark::State& state, bool attach_all) {
   if (!have_model(state)) return;
-  EpochChain chain;
-  // Check: over one period of the drive, p1 equals libsvm's and R equals the closed form.
-  for (long k = 1; k <= Drive::period; ++k) {
-    (void)chain.classify(k);
-    const auto& now = drive().ranges[static_cast<std::size_t>(k % Drive::period)];
-    const auto& before = drive().ranges[static_cast<std::size_t>(k - 1)];
-    for (std::size_t a = 0; a < kRangesPerEpoch; ++a) {
-      const double change = now[a] - before[a];
-      double prob[2];
-      const auto node = NlosSvmBenchModel::node(chain.m.standardise(change / dt, chain.speed));
-      svm_predict_probability(chain.m.libsvm, node.data(), prob);
-      const double p1 = prob[chain.m.nlos_class()], p2 = consistency_reference(change, chain.speed * dt, 0.1);
-      const double r = p1 * p2 / (p1 * p2 + (1 - p1) * (1 - p2));
-      if (!(std::abs(chain.p1[a] - p1) <= 1e-6) || !(std::abs(chain.R[a] - r) <= 1e-6)) {
-        state.SkipWithError("the chain's p1 or R differs from libsvm and the closed form");
-        return;
+  {
+    // Check: over one period of the drive, p1 equals libsvm's probability and R the closed
+    // form p1 p2 / (p1 p2 + q1 q2) with p2 of eq. 6 written out.
+    EpochChain chain;
+    (void)chain.classify(0);  // each anchor's first range: no range rate yet
+    for (long k = 1; k <= Drive::period; ++k) {
+      (void)chain.classify(k);
+      const auto& now = drive().ranges[static_cast<std::size_t>(k % Drive::period)];
+      const auto& before = drive().ranges[static_cast<std::size_t>(k - 1)];
+      for (std::size_t a = 0; a < kRangesPerEpoch; ++a) {
+        const double change = now[a] - before[a];
+        double prob[2];
+        const auto node = NlosSvmBenchModel::node(model().standardise(change / dt, chain.speed));
+        svm_predict_probability(model().libsvm, node.data(), prob);
+        const double p1 = prob[model().nlos_class()], p2 = consistency_reference(change, chain.speed * dt, 0.1);
+        const double r = p1 * p2 / (p1 * p2 + (1 - p1) * (1 - p2));
+        if (!(std::abs(chain.verdicts[a].p1 - p1) <= 1e-6) || !(std::abs(chain.verdicts[a].R - r) <= 1e-6)) {
+          state.SkipWithError("the pipeline's p1 or R differs from libsvm and the closed form");
+          return;
+        }
       }
     }
   }
+  EpochChain chain;
   DriveStream stream;
+  (void)chain.classify(stream.k);
   long attached = 0;
   for (auto _ : state) {
     const Smoother::Measurements meas = chain.classify(stream.k + 1, attach_all);
