@@ -27,6 +27,7 @@
 #include "ctxfuse/pipelines/gins/run.hpp"
 #include "fault_stream.hpp"
 #include "gins/drive_sim.hpp"
+#include "gins_nav20.hpp"
 
 namespace {
 using namespace ctxfuse;
@@ -113,7 +114,7 @@ bool finite(const State& x) {
       x.values);
 }
 
-using Pass = gins::ForwardPass<gins::Nav20>;
+using Pass = test::GinsNav20Pass;  // gins::ForwardPass<gins::Nav20>, compiled once (support/gins_nav20.cpp)
 
 /// The pass as the replay's handler, its belief checked after every step it takes once aligned.
 struct CheckedPass {
@@ -149,7 +150,7 @@ RunOutcome run(const Fault* f) {
   pass.finish();
   out.counts = pass.counts();
   out.aligned = pass.aligned();
-  for (const auto& r : pass.recorder().records())
+  for (const auto& r : pass.records())
     out.epochs.push_back({r.t, gins::trajectory_row<gins::Nav20>(r.t, r.posterior, pass.gnss_lever()).llh});
   return out;
 }
