@@ -40,6 +40,7 @@ TEST(CliRunGins, UsageErrorsNameTheProblem) {
       {"--outage 0:45:40", "length"},
       {"--outage 15:10:40", "period"},
       {"--constraints zupt,foo", "unknown constraint 'foo'"},
+      {"--constraints zupt,mag", "needs a magnetometer stream"},
       {"--constraints ''", "--constraints"},
       {"--imu-rpy 1,2", "--imu-rpy"},
       {"--gnss-lever 0,0,nan", "finite"},

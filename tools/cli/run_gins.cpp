@@ -74,10 +74,14 @@ std::string parse_constraints(const std::string& s, gins::Constraints* out) {
     if (item == "zupt") c.zupt = true;
     else if (item == "zihr") c.zihr = true;
     else if (item == "nhc") c.nhc = true;
-    else if (item == "mag") c.mag = true;
-    else return "unknown constraint '" + item + "' (any of zupt,zihr,nhc,mag, or none)";
+    // The pass takes a magnetometer stream (ForwardPass::on(MagSample)), but a run gins folder
+    // has none to read: asking for it must not run without it and look as if it had.
+    else if (item == "mag")
+      return "constraint 'mag' needs a magnetometer stream, which run gins does not read (a folder holds *.pos and "
+             "imu*.csv)";
+    else return "unknown constraint '" + item + "' (any of zupt,zihr,nhc, or none)";
   }
-  if (!c.any()) return "empty constraint list (any of zupt,zihr,nhc,mag, or none)";
+  if (!c.any()) return "empty constraint list (any of zupt,zihr,nhc, or none)";
   if (out) *out = c;
   return {};
 }
@@ -95,7 +99,7 @@ std::shared_ptr<void> add_options(CLI::App& app) {
                                         "30 s before the last); scored against the RTK-fixed epochs")
       ->check(CLI::Validator([](std::string& s) { return parse_outage(s, nullptr); }, "LEN:PERIOD:START", "outage"));
   app.add_option("--gnss-rate", o->gnss_rate, "decimate GNSS to HZ (default: every fix)")->check(ctxfuse::cli::kPositiveNumber);
-  app.add_option("--constraints", o->constraints, "any of zupt,zihr,nhc,mag, or none")
+  app.add_option("--constraints", o->constraints, "any of zupt,zihr,nhc, or none")
       ->check(CLI::Validator([](std::string& s) { return parse_constraints(s, nullptr); }, "LIST", "constraints"));
   app.add_flag("--smooth", o->smooth, "RTS-smooth the forward pass (the CSV is then the smoothed trajectory)");
   app.add_option("--imu-rpy", o->imu_rpy, "IMU axes -> body (forward, right, down): roll,pitch,yaw [deg]")
