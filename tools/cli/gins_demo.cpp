@@ -9,9 +9,8 @@
 #include <string_view>
 
 #include "cli/formatted.hpp"
-#include "cli/gins_json.hpp"
+#include "cli/gins_study.hpp"
 #include "cli/registry.hpp"
-#include "ctxfuse/eval/gins_sim_study.hpp"
 
 namespace ctxfuse::cli {
 namespace {
@@ -21,7 +20,7 @@ const eval::GinsSimStudy& study_for(const sim::Drive& d) {
   static const sim::Drive* cached_for = nullptr;
   static std::unique_ptr<eval::GinsSimStudy> cached;
   if (!cached || cached_for != &d) {
-    cached = std::make_unique<eval::GinsSimStudy>(eval::gins_sim_study(d));
+    cached = std::make_unique<eval::GinsSimStudy>(gins_study_of(d));
     cached_for = &d;
   }
   return *cached;

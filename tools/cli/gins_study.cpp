@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "cli/formatted.hpp"
-#include "cli/gins_json.hpp"
+#include "cli/gins_study.hpp"
 #include "cli/json.hpp"
 #include "cli/options.hpp"
 #include "cli/registry.hpp"
@@ -21,6 +21,9 @@
 #include "ctxfuse/sim/drive.hpp"
 
 namespace ctxfuse::cli {
+
+eval::GinsSimStudy gins_study_of(const sim::Drive& drive) { return eval::gins_sim_study(drive); }
+
 namespace {
 
 int gins_study(Args args, std::ostream& out, std::ostream& err) {
@@ -45,7 +48,7 @@ int gins_study(Args args, std::ostream& out, std::ostream& err) {
   for (const std::uint64_t seed : seeds) {
     sim::DriveConfig cfg;
     cfg.seed = seed;
-    const eval::GinsSimStudy st = eval::gins_sim_study(cfg);
+    const eval::GinsSimStudy st = gins_study_of(sim::simulate_drive(cfg));
     out << formatted("\n=== seed %llu: %zu IMU samples, %zu fixes; scene classifier accuracy %.2f %%; static while moving: "
                      "IMU detector %.2f %%, with the odometer %.2f %% of moving samples\n",
                      static_cast<unsigned long long>(seed), st.imu_samples, st.fixes, 100.0 * st.scene_accuracy,

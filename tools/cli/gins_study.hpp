@@ -1,11 +1,16 @@
-// JSON of the GNSS/INS study's error statistics (eval/gins_sim_study.hpp), shared by
-// `ctxfuse gins-study` and the demo's scene_gins / phone_gins sections.
+// The GNSS/INS study (eval/gins_sim_study.hpp) as `ctxfuse gins-study` (gins_study.cpp) and the
+// demo's scene_gins / phone_gins sections (gins_demo.cpp) share it: the study of one drive,
+// compiled once in gins_study.cpp (its instantiation costs a minute of compile CPU), and the
+// JSON of its error statistics.
 #pragma once
 
 #include "cli/json.hpp"
 #include "ctxfuse/eval/gins_sim_study.hpp"
 
 namespace ctxfuse::cli {
+
+/// eval::gins_sim_study on `drive` (defined in gins_study.cpp).
+eval::GinsSimStudy gins_study_of(const sim::Drive& drive);
 
 inline Json gins_errors_json(const eval::HorizontalErrors& e) {
   Json j;
