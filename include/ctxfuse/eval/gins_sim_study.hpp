@@ -66,18 +66,20 @@ class OdometerStaticDecision {
  public:
   explicit OdometerStaticDecision(double speed_sigma) : speed_limit_(3.0 * speed_sigma) {}
   bool push(const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel, std::optional<double> speed) {
-    const bool imu_static = detector_.push(gyro, accel);
-    const bool now = imu_static && (!speed || std::abs(*speed) <= speed_limit_);
+    imu_static_ = detector_.push(gyro, accel);
+    const bool now = imu_static_ && (!speed || std::abs(*speed) <= speed_limit_);
     entered_ = now && !static_;
     static_ = now;
     return now;
   }
   bool entered_static() const { return entered_; }
+  /// The raw-IMU detector's own verdict on the last sample.
+  bool imu_static() const { return imu_static_; }
 
  private:
   models::StaticDetector detector_;
   double speed_limit_;
-  bool static_ = false, entered_ = false;
+  bool imu_static_ = false, static_ = false, entered_ = false;
 };
 
 /// Horizontal error statistics [m] over a set of 1 Hz truth epochs.
@@ -146,7 +148,6 @@ inline GinsSimDrive gins_sim_drive(const sim::Drive& d) {
     out.speed_t.push_back(s.t);
     out.speed.push_back(s.speed_mps);
   }
-  models::StaticDetector detector;
   OdometerStaticDecision decision(out.speed_noise);
   std::size_t moving = 0, false_static = 0, false_static_odometer = 0, spd = 0;
   for (std::size_t k = 0; k < d.imu.size(); ++k) {
@@ -161,8 +162,8 @@ inline GinsSimDrive gins_sim_drive(const sim::Drive& d) {
     x.get<"theta">() = Eigen::Quaterniond(Eigen::AngleAxisd(3.14159265358979323846 / 2.0 - tr.yaw, Eigen::Vector3d::UnitZ()));
     out.truth.push_back(x);
     out.region.push_back(static_cast<int>(tr.region));
-    const bool st = detector.push(out.gyro.back(), out.accel.back());
     const bool st_odometer = decision.push(out.gyro.back(), out.accel.back(), odometer_speed_at(out, s.t, spd));
+    const bool st = decision.imu_static();
     if (!tr.is_static) {
       ++moving;
       false_static += st ? 1 : 0;
