@@ -247,7 +247,7 @@ int run_context(Args args, std::ostream& out, std::ostream& err) {
   }
 }
 
-const ctxfuse::cli::RegisterCommand reg{
+const ctxfuse::cli::RegisterCommand reg_context_data{
     {"context", "joint SVM + HMM region recognition on labelled feature sequences", run_context}};
 
 }  // namespace

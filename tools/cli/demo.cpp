@@ -180,7 +180,7 @@ int demo_command(Args args, std::ostream& out, std::ostream& err) {
   return 0;
 }
 
-const RegisterCommand reg{{"demo", "simulate the default drive and run every demo section", demo_command}};
+const RegisterCommand reg_demo{{"demo", "simulate the default drive and run every demo section", demo_command}};
 
 }  // namespace
 }  // namespace ctxfuse::cli

@@ -40,7 +40,7 @@ int run_features(Args args, std::ostream& out, std::ostream& err) {
   return 2;
 }
 
-const ctxfuse::cli::RegisterCommand reg{
+const ctxfuse::cli::RegisterCommand reg_features{
     {"features", "feature tables for context classifiers (gnss, nmea, uwb-static, dw1000)", run_features}};
 
 }  // namespace

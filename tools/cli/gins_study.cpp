@@ -110,7 +110,7 @@ int gins_study(Args args, std::ostream& out, std::ostream& err) {
   return 0;
 }
 
-const RegisterCommand reg{{"gins-study", "GNSS/INS schemes (a)-(d), fixed vs scene-adaptive R, on simulated drives (papers B, D)", gins_study}};
+const RegisterCommand reg_gins_study{{"gins-study", "GNSS/INS schemes (a)-(d), fixed vs scene-adaptive R, on simulated drives (papers B, D)", gins_study}};
 
 }  // namespace
 }  // namespace ctxfuse::cli

@@ -27,7 +27,7 @@ void run_section(const DemoContext& ctx, Json& json, std::ostream& out) {
   region_imm_report({log, truth, rec, note, ctx.plotter}, json, out);
 }
 
-const RegisterDemoSection reg{{"region_imm", "Region-aware IMM, seamless indoor/outdoor (paper A)", run_section}};
+const RegisterDemoSection reg_region_imm{{"region_imm", "Region-aware IMM, seamless indoor/outdoor (paper A)", run_section}};
 
 }  // namespace
 }  // namespace ctxfuse::cli

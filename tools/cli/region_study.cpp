@@ -225,7 +225,7 @@ int region_study(Args args, std::ostream& out, std::ostream& err) {
   return 0;
 }
 
-const RegisterCommand reg{{"region-study", "sensor picture, gate rejections and errors per zone (region IMM vs IMM vs FKF)", region_study}};
+const RegisterCommand reg_region_study{{"region-study", "sensor picture, gate rejections and errors per zone (region IMM vs IMM vs FKF)", region_study}};
 
 }  // namespace
 }  // namespace ctxfuse::cli

@@ -78,7 +78,7 @@ int run(const std::shared_ptr<void>& opts, const RunInput& in, RunOutput& out, s
   return 0;
 }
 
-const RegisterRunPipeline reg{{"region-imm", "region paper: recognised regions drive an IMM of three planar EKFs (paper A)",
+const RegisterRunPipeline reg_run_region_imm{{"region-imm", "region paper: recognised regions drive an IMM of three planar EKFs (paper A)",
                                "imu.csv speed.csv uwb.csv gnss.csv sats.csv (truth.csv to score; --train/--validate logs: sats.csv, "
                                "truth.csv for the labels)",
                                add_options, run}};

@@ -183,7 +183,7 @@ int run_uwb(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::os
   return 0;
 }
 
-const RegisterRunPipeline reg{{"uwb", "NLOS-robust UWB (paper C) on a Hanyang dynamic case, with its baselines",
+const RegisterRunPipeline reg_run_uwb{{"uwb", "NLOS-robust UWB (paper C) on a Hanyang dynamic case, with its baselines",
                                "A<id>.csv per anchor (trajectory.csv and RMSD_results.txt to score; the other cases of the "
                                "dataset, or --train, for the SVM)",
                                add_options, {}, run_uwb}};

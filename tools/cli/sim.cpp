@@ -49,7 +49,7 @@ int sim_command(Args args, std::ostream& out, std::ostream& err) {
   return 0;
 }
 
-const RegisterCommand reg{{"sim", "write a simulated drive as CSV logs", sim_command}};
+const RegisterCommand reg_sim{{"sim", "write a simulated drive as CSV logs", sim_command}};
 
 }  // namespace
 }  // namespace ctxfuse::cli
