@@ -74,14 +74,10 @@ std::string parse_constraints(const std::string& s, gins::Constraints* out) {
     if (item == "zupt") c.zupt = true;
     else if (item == "zihr") c.zihr = true;
     else if (item == "nhc") c.nhc = true;
-    // The pass takes a magnetometer stream (ForwardPass::on(MagSample)), but a run gins folder
-    // has none to read: asking for it must not run without it and look as if it had.
-    else if (item == "mag")
-      return "constraint 'mag' needs a magnetometer stream, which run gins does not read (a folder holds *.pos and "
-             "imu*.csv)";
-    else return "unknown constraint '" + item + "' (any of zupt,zihr,nhc, or none)";
+    else if (item == "mag") c.mag = true;  // needs DIR's mag*.csv (checked once the folder is read)
+    else return "unknown constraint '" + item + "' (any of zupt,zihr,nhc,mag, or none)";
   }
-  if (!c.any()) return "empty constraint list (any of zupt,zihr,nhc, or none)";
+  if (!c.any()) return "empty constraint list (any of zupt,zihr,nhc,mag, or none)";
   if (out) *out = c;
   return {};
 }
@@ -99,7 +95,7 @@ std::shared_ptr<void> add_options(CLI::App& app) {
                                         "30 s before the last); scored against the RTK-fixed epochs")
       ->check(CLI::Validator([](std::string& s) { return parse_outage(s, nullptr); }, "LEN:PERIOD:START", "outage"));
   app.add_option("--gnss-rate", o->gnss_rate, "decimate GNSS to HZ (default: every fix)")->check(ctxfuse::cli::kPositiveNumber);
-  app.add_option("--constraints", o->constraints, "any of zupt,zihr,nhc, or none")
+  app.add_option("--constraints", o->constraints, "any of zupt,zihr,nhc,mag (mag: DIR holds a mag*.csv), or none")
       ->check(CLI::Validator([](std::string& s) { return parse_constraints(s, nullptr); }, "LIST", "constraints"));
   app.add_flag("--smooth", o->smooth, "RTS-smooth the forward pass (the CSV is then the smoothed trajectory)");
   app.add_option("--imu-rpy", o->imu_rpy, "IMU axes -> body (forward, right, down): roll,pitch,yaw [deg]")
@@ -172,6 +168,12 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
     ro.progress = [&](double f) { progress.update(f); };
     try {
       rec = gins::read_recording(in.data_dir);
+      // Asking for the magnetometer must not run without one and look as if it had.
+      if (ro.constraints.mag && rec.mag.empty()) {
+        err << "ctxfuse run gins: constraint 'mag' needs a magnetometer stream: no mag*.csv in " << in.data_dir.string() << '\n';
+        return 2;
+      }
+      ro.mag = rec.mag;
       res = gins::run<gins::Nav20>(rec.imu, rec.fixes, settings, ro);
     } catch (const std::exception& e) {
       err << "ctxfuse run gins: " << e.what() << '\n';
@@ -254,7 +256,7 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
 }
 
 const RegisterRunPipeline reg{{"gins", "GNSS/INS error-state filter (papers B and D) on a recording: outages, constraints, RTS",
-                               "one RTKLIB *.pos and one imu*.csv with its .tag (RTK-fixed epochs of the .pos to score outages)",
+                               "one RTKLIB *.pos and one imu*.csv with its .tag, optionally one mag*.csv (RTK-fixed epochs of the .pos to score outages)",
                                add_options, {}, run_gins}};
 
 }  // namespace

@@ -1,5 +1,5 @@
 // The GNSS/INS pipeline on one recording: reading a folder (one RTKLIB *.pos, one imu*.csv
-// with its .tag), the forward pass over io::replay, optionally the RTS smoother over its step
+// with its .tag, optionally one mag*.csv), the forward pass over io::replay, optionally the RTS smoother over its step
 // records, and the trajectory rows. The GNSS fixes are the filter's only aiding; the same .pos
 // is the RTK reference of the evaluation (eval/outage_protocol.hpp), which this file never sees.
 #pragma once
@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "ctxfuse/io/imu_tag.hpp"
+#include "ctxfuse/io/mag_csv.hpp"
 #include "ctxfuse/io/replay.hpp"
 #include "ctxfuse/io/rtklib_pos.hpp"
 #include "ctxfuse/pipelines/gins/forward.hpp"
@@ -21,18 +22,22 @@ namespace ctxfuse::pipelines::gins {
 struct Recording {
   std::vector<io::ImuSample> imu;  // IMU axes, SI units, stamps as logged (no delay applied)
   std::vector<io::GnssFix> fixes;
-  std::filesystem::path pos_file, imu_file;
+  std::vector<io::MagSample> mag;  // empty without a mag*.csv (io/mag_csv.hpp: IMU axes, own stamps)
+  std::filesystem::path pos_file, imu_file, mag_file;
 };
 
-/// Reads DIR: exactly one *.pos and one imu*.csv (with imu*.csv.tag beside it).
+/// Reads DIR: exactly one *.pos and one imu*.csv (with imu*.csv.tag beside it), and at most
+/// one mag*.csv.
 inline Recording read_recording(const std::filesystem::path& dir) {
   namespace fs = std::filesystem;
-  std::vector<fs::path> pos, csv;
+  std::vector<fs::path> pos, csv, mag;
   for (const auto& e : fs::directory_iterator(dir)) {
     const std::string name = e.path().filename().string();
     if (e.path().extension() == ".pos") pos.push_back(e.path());
     if (name.starts_with("imu") && e.path().extension() == ".csv") csv.push_back(e.path());
+    if (name.starts_with("mag") && e.path().extension() == ".csv") mag.push_back(e.path());
   }
+  if (mag.size() > 1) throw std::runtime_error(dir.string() + ": expected at most one mag*.csv file, found " + std::to_string(mag.size()));
   auto one = [&](const std::vector<fs::path>& v, const char* what) {
     if (v.size() != 1)
       throw std::runtime_error(dir.string() + ": expected one " + what + " file, found " + std::to_string(v.size()));
@@ -45,6 +50,10 @@ inline Recording read_recording(const std::filesystem::path& dir) {
   if (!fs::exists(tag)) throw std::runtime_error(r.imu_file.string() + ": no time-tag file " + tag.filename().string());
   r.fixes = io::to_gnss_fixes(io::read_rtklib_pos(r.pos_file));
   r.imu = io::to_imu_samples(io::read_imu_csv(r.imu_file), io::read_time_tag(tag));
+  if (!mag.empty()) {
+    r.mag_file = mag.front();
+    r.mag = io::read_mag_csv(r.mag_file);
+  }
   return r;
 }
 
@@ -53,6 +62,9 @@ struct RunOptions {
   Constraints constraints;
   OutageSchedule outages;       // disabled by default
   double gnss_rate_hz = 0.0;    // 0: every fix
+  /// Magnetometer samples (IMU axes, their own stamps: the IMU delay is not added), replayed
+  /// with the IMU and fixes; used when constraints.mag is set.
+  std::span<const io::MagSample> mag;
   bool smooth = false;
   std::function<void(double)> progress;  // fraction of the recording done, now and then
 };
@@ -79,7 +91,7 @@ struct RunResult {
   double alignment_time = 0.0;
   std::size_t record_bytes = 0;  // memory of the step records
   Status smooth_status{};
-  io::ReplayReport<1> replay;
+  io::ReplayReport<2> replay;  // streams: GNSS fixes, magnetometer
 };
 
 template <class Model>
@@ -113,7 +125,7 @@ RunResult run(std::span<const io::ImuSample> imu_raw, std::span<const io::GnssFi
     pass.reserve(fixes.size() + static_cast<std::size_t>(std::max(0.0, span) * per_s) + 16);
     if (opt.progress) pass.set_progress(opt.progress, imu.front().t, imu.back().t);
   }
-  out.replay = io::replay(pass, std::span<const io::ImuSample>(imu), fixes);
+  out.replay = io::replay(pass, std::span<const io::ImuSample>(imu), fixes, opt.mag);
   pass.finish();
   out.counts = pass.counts();
   out.static_start = pass.static_start();
