@@ -1,6 +1,8 @@
 // RTS smoother over the error-state filter's step records: on a linear model with time-varying
 // F (irregular time steps) and measurement gaps it equals the batch least-squares solution of
 // the whole run, means and covariances; the smoothed covariance is never above the filtered one.
+// For a model that declares its transition's block pattern (the 20-state INS), the transition
+// a record keeps, composed block-sparse, equals the dense product of the steps' F.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -10,6 +12,8 @@
 
 #include "ctxfuse/filters/eskf.hpp"
 #include "ctxfuse/filters/rts.hpp"
+#include "ctxfuse/models/ins_augment.hpp"
+#include "ctxfuse/models/ins_nav.hpp"
 #include "ctxfuse/sim/random.hpp"
 
 namespace {
@@ -167,4 +171,44 @@ TEST(Rts, RefusesAnEpochThatDoesNotAdvanceAndKeepsTheRecords) {
   EXPECT_EQ(rec.records().size(), 2u);
 }
 
+TEST(Rts, BlockSparseTransitionEqualsTheDenseProduct) {
+  using Nav20 = models::Augmented<models::InsNavModel<models::FullStrapdown>, Block<"mount", 2>, Block<"lever", 3>>;
+  using L = Nav20::ErrorLayout;
+  constexpr auto pat = Nav20::transition_blocks;
+  static_assert(decltype(pat)::layout::size == 20);
+  sim::Rng rng(11);
+  // A random F with the declared pattern: its identity blocks identity, diagonal blocks
+  // diagonal, zero outside it.
+  auto random_f = [&] {
+    SquareMatrix<20> F = SquareMatrix<20>::Zero();
+    for (std::size_t k = 0; k < pat.size; ++k) {
+      const auto rb = static_cast<std::size_t>(pat.row[k]), cb = static_cast<std::size_t>(pat.col[k]);
+      const int r0 = L::offsets[rb], rs = L::sizes[rb], c0 = L::offsets[cb], cs = L::sizes[cb];
+      for (int i = 0; i < rs; ++i)
+        for (int j = 0; j < cs; ++j) {
+          const bool on_diagonal = i == j;
+          if (pat.kind[k] == BlockKind::identity) F(r0 + i, c0 + j) = on_diagonal ? 1.0 : 0.0;
+          else if (pat.kind[k] == BlockKind::diagonal) F(r0 + i, c0 + j) = on_diagonal ? 1.0 + 0.1 * rng.normal() : 0.0;
+          else F(r0 + i, c0 + j) = (on_diagonal && rb == cb ? 1.0 : 0.0) + 0.1 * rng.normal();
+        }
+    }
+    return F;
+  };
+  RtsRecorder<Nav20> rec;
+  eskf::Belief<Nav20> b{};
+  b.cov.setIdentity();
+  rec.start(0.0, b);
+  SquareMatrix<20> dense = SquareMatrix<20>::Identity();
+  for (int k = 0; k < 7; ++k) {
+    const SquareMatrix<20> F = random_f();
+    rec.predicted(F);
+    dense = (F * dense).eval();
+  }
+  ASSERT_TRUE(rec.record(1.0, b, b).accepted());
+  const SquareMatrix<20>& phi = rec.records().back().transition;
+  EXPECT_LE((phi - dense).cwiseAbs().maxCoeff(), 1e-12 * dense.cwiseAbs().maxCoeff()) << (phi - dense).cwiseAbs().maxCoeff();
+  EXPECT_GT((dense - SquareMatrix<20>::Identity()).cwiseAbs().maxCoeff(), 0.1);  // the steps did compose
+}
+
 }  // namespace
+

@@ -31,6 +31,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "ctxfuse/core/block_sparsity.hpp"
 #include "ctxfuse/core/concepts.hpp"
 #include "ctxfuse/core/gaussian.hpp"
 #include "ctxfuse/core/numerics.hpp"
@@ -60,7 +61,18 @@ class RtsRecorder {
   }
 
   /// One prediction's transition F (eskf::predict's F_used), composed since the last epoch.
-  void predicted(const SquareMatrix<N>& F) { phi_ = (F * phi_).eval(); }
+  /// Block-sparse when the model declares `transition_blocks` (the pattern eskf::predict's
+  /// covariance step already relies on): the whole-drive forward pass of the GNSS/INS pipeline
+  /// spent a third of its time in Eigen's blocked GEMM on this 20 x 20 product (perf,
+  /// docs/benchmarks.md "gins"). Otherwise coefficient-based, for the same reason.
+  void predicted(const SquareMatrix<N>& F) {
+    if constexpr (requires { Model::transition_blocks; }) {
+      block_sparse_product<Model::transition_blocks>(F, phi_, phi_next_);
+    } else {
+      phi_next_.noalias() = F.lazyProduct(phi_);
+    }
+    phi_ = phi_next_;
+  }
 
   /// Closes an epoch. Refused (nothing stored) before start() or when the stamp does not
   /// advance.
@@ -116,6 +128,7 @@ class RtsRecorder {
  private:
   std::vector<Record> records_;
   SquareMatrix<N> phi_ = SquareMatrix<N>::Identity();
+  SquareMatrix<N> phi_next_;  // F phi_, written before phi_ is
   bool smoothed_ = false;
 };
 
