@@ -1,7 +1,8 @@
 // The GNSS/INS pipeline on one recording: reading a folder (one RTKLIB *.pos, one imu*.csv
-// with its .tag, optionally one mag*.csv), the forward pass over io::replay, optionally the RTS smoother over its step
-// records, and the trajectory rows. The GNSS fixes are the filter's only aiding; the same .pos
-// is the RTK reference of the evaluation (eval/outage_protocol.hpp), which this file never sees.
+// with its .tag, optionally one mag*.csv), the forward pass over io::replay, optionally the
+// RTS smoother over its step records, and the trajectory rows. The GNSS fixes (and the
+// magnetometer, when asked for) are the filter's only aiding; the same .pos is the RTK
+// reference of the evaluation (eval/outage_protocol.hpp), which this file never sees.
 #pragma once
 
 #include <filesystem>
