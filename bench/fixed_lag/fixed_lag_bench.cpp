@@ -5,8 +5,8 @@
 //                   --benchmark_out=fixed_lag.json --benchmark_out_format=json
 //
 // FixedLag/Stream: steps along a periodic drive, the steady state a user pays per epoch.
-// FixedLag/SameWindow: the step that produced the snapshot window Ceres solves, from a copy of
-//   the smoother taken before it (the 2 x ~9 kB copy is timed too).
+// FixedLag/SameWindow: the step that produced the snapshot window Ceres solves, on copies of
+//   the smoother taken before it (the copies made outside the timing, step_snapshot_copies).
 // FixedLag/Ceres/*: that window built as a ceres::Problem (autodiff costs from the same
 //   factors, problem construction timed) and solved with tolerances that reproduce the
 //   smoother's solution to 1e-6; checked before anything is timed.
@@ -30,17 +30,13 @@ void FixedLag_Stream(benchmark::State& state) {
 
 void FixedLag_SameWindow(benchmark::State& state) {
   const Snapshot& snap = snapshot();
-  auto s = std::make_unique<Smoother>(*snap.before);
+  const std::unique_ptr<Smoother> stepped = step_snapshot_copies(state);
+  const Smoother& s = *stepped;
   double gap = 0.0;
-  for (auto _ : state) {
-    *s = *snap.before;
-    if (!s->step(snap.t, {}, snap.meas)) state.SkipWithError("the step was refused");
-    benchmark::DoNotOptimize(s->newest().data());
-  }
   for (int i = 0; i < K; ++i)
-    gap = std::max(gap, (s->window().epochs[static_cast<std::size_t>(i)].x - snap.after->window().epochs[static_cast<std::size_t>(i)].x)
+    gap = std::max(gap, (s.window().epochs[static_cast<std::size_t>(i)].x - snap.after->window().epochs[static_cast<std::size_t>(i)].x)
                             .cwiseAbs().maxCoeff());
-  state.counters["gauss_newton_iterations"] = s->report().iterations;
+  state.counters["gauss_newton_iterations"] = s.report().iterations;
   state.counters["gap_to_snapshot"] = gap;
 }
 

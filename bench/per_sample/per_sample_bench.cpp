@@ -183,11 +183,7 @@ void PerSample_Fusion_SameWindow(benchmark::State& state) {
     state.SkipWithError("the step does not reproduce the snapshot window");
     return;
   }
-  for (auto _ : state) {
-    *s = *snap.before;
-    if (!s->step(snap.t, {}, snap.meas)) state.SkipWithError("the step was refused");
-    benchmark::DoNotOptimize(s->newest().data());
-  }
+  (void)step_snapshot_copies(state);
   per_range_counter(state);
 }
 

@@ -69,6 +69,14 @@ void expect_motion_jacobians(const Model& model, const typename Model::Input& u,
     const auto numb = central_jacobian<6, 6>([&](const Vector<6>& x) { return f.evaluate(a, x); }, b);
     EXPECT_LT((Ja - numa).cwiseAbs().maxCoeff(), 1e-6 * numa.cwiseAbs().maxCoeff()) << k;
     EXPECT_LT((Jb - numb).cwiseAbs().maxCoeff(), 1e-6 * numb.cwiseAbs().maxCoeff()) << k;
+    if constexpr (AffineProcessModel<Model>) {
+      // The declaration the smoother relies on (AffineFactorBlocks): the same Jacobians at
+      // any pair of states, to the last bit.
+      SquareMatrix<6> Ja0, Jb0;
+      (void)f.evaluate(Vector<6>::Zero(), 100.0 * state(k + 2), &Ja0, &Jb0);
+      EXPECT_EQ(Ja, Ja0) << k;
+      EXPECT_EQ(Jb, Jb0) << k;
+    }
   }
 }
 
@@ -84,6 +92,17 @@ TEST(FactorJacobians, AccelerationDrivenMotionFactor) {
   imu.accel_psd = 0.05;
   expect_motion_jacobians(imu, Vector<3>(0.4, -1.2, 0.1), 0.01);
   expect_motion_jacobians(imu, Vector<3>(2.0, 0.3, -0.5), 0.2);
+}
+
+TEST(FactorJacobians, LinearProcessMotionFactor) {
+  models::LinearProcess<6, 2> lp;
+  lp.F = SquareMatrix<6>::Identity();
+  lp.F.topRightCorner<3, 3>().diagonal().setConstant(0.2);
+  lp.F(0, 1) = 0.05;
+  lp.B.bottomRows<2>().setIdentity();
+  lp.Q = SquareMatrix<6>::Identity() * 0.3;
+  lp.Q(1, 0) = lp.Q(0, 1) = 0.1;
+  expect_motion_jacobians(lp, Vector<2>(0.5, -0.25), 0.2);
 }
 
 TEST(FactorJacobians, AccelerationDrivenMatchesConstantVelocityAtZeroInput) {
@@ -127,6 +146,16 @@ struct WrappedHeading {
     return Vector<2>(a(0) - b(0), std::remainder(a(1) - b(1), 2.0 * 3.141592653589793));
   }
 };
+
+// What the smoother's fixed motion blocks are used for, and what not: a model that declares
+// itself affine but has its own difference (a wrapped angle is not linear) stays general.
+struct WrappedHeadingDeclaredAffine : WrappedHeading {
+  static constexpr bool affine_in_state = true;
+};
+static_assert(AffineProcessModel<models::ConstantVelocity<PV3, 3>>);
+static_assert(AffineProcessModel<models::AccelerationDriven<PV3, 3>>);
+static_assert(AffineProcessModel<models::LinearProcess<6, 2>>);
+static_assert(!AffineProcessModel<WrappedHeading> && !AffineProcessModel<WrappedHeadingDeclaredAffine>);
 
 TEST(FactorJacobians, ModelDifferenceIsUsed) {
   WrappedHeading m;

@@ -5,6 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
 #include <vector>
 
 #include "ctxfuse/core/block_tridiagonal.hpp"
@@ -124,7 +127,7 @@ TEST(WindowAlgebra, NormalEquationsSolveAndLastCovarianceEqualDense) {
     EXPECT_LT((sys.diagonal[k] - H.block<N, N>(N * i, N * i)).cwiseAbs().maxCoeff(), 1e-9 * H.cwiseAbs().maxCoeff());
     EXPECT_LT((sys.gradient[k] - g.segment<N>(N * i)).cwiseAbs().maxCoeff(), 1e-9 * g.cwiseAbs().maxCoeff());
     if (i + 1 < chain.n) {
-      EXPECT_LT((sys.upper[k] - H.block<N, N>(N * i, N * (i + 1))).cwiseAbs().maxCoeff(), 1e-9 * H.cwiseAbs().maxCoeff());
+      EXPECT_LT((sys.lower[k] - H.block<N, N>(N * (i + 1), N * i)).cwiseAbs().maxCoeff(), 1e-9 * H.cwiseAbs().maxCoeff());
     }
   }
   EXPECT_NEAR(sys.cost, 0.5 * d.r.squaredNorm(), 1e-12 * d.r.squaredNorm());
@@ -187,6 +190,68 @@ TEST(WindowAlgebra, IndefiniteBlocksGiveAStatusAndLeaveThePriorAlone) {
   EXPECT_EQ(chol.factorize(sys), Problem::system_not_positive_definite);
   sys.diagonal[1](2, 2) = std::nan("");
   EXPECT_EQ(chol.factorize(sys, 1.0), Problem::system_not_positive_definite);
+}
+
+/// A random symmetric positive definite M x M with eigenvalues spread log-uniformly over
+/// `decades` decades (condition number 10^decades).
+template <int M>
+SquareMatrix<M> random_spd(int seed, double decades) {
+  std::srand(static_cast<unsigned>(seed));
+  const Eigen::HouseholderQR<SquareMatrix<M>> qr(SquareMatrix<M>::Random());
+  const SquareMatrix<M> Q = qr.householderQ();
+  Vector<M> eig;
+  for (int i = 0; i < M; ++i) eig(i) = std::pow(10.0, decades * (M > 1 ? double(i) / (M - 1) : 0.0) - 2.0);
+  SquareMatrix<M> S = Q * eig.asDiagonal() * Q.transpose();
+  symmetrize(S);
+  return S;
+}
+
+template <int M>
+void expect_spd_inverse_matches_eigen() {
+  SCOPED_TRACE(M);
+  for (int seed = 1; seed <= 20; ++seed) {
+    const double decades = 0.5 * (seed % 13);  // condition numbers 1 .. 1e6
+    const SquareMatrix<M> S = random_spd<M>(seed, decades);
+    const SquareMatrix<M> ref = S.llt().solve(SquareMatrix<M>::Identity());
+    SquareMatrix<M> inv, inv_ldl;
+    ASSERT_TRUE(spd_inverse<M>(S, inv)) << seed;
+    ASSERT_TRUE(detail::spd_inverse_ldl<M>(S, inv_ldl)) << seed;
+    // Both are backward stable: errors of order cond * eps relative to the inverse.
+    const double tol = 50.0 * std::pow(10.0, decades) * 2.2e-16 * ref.cwiseAbs().maxCoeff();
+    EXPECT_LT((inv - ref).cwiseAbs().maxCoeff(), tol) << seed;
+    EXPECT_LT((inv_ldl - ref).cwiseAbs().maxCoeff(), tol) << seed;
+    EXPECT_EQ(inv, inv.transpose()) << seed;
+  }
+  // Not positive definite although every diagonal entry is positive (I with one pair of
+  // off-diagonal entries 1.5: eigenvalues -0.5 and 2.5), each pair in turn: the pivots decide.
+  SquareMatrix<M> out;
+  for (int i = 1; i < M; ++i)
+    for (int j = 0; j < i; ++j) {
+      SquareMatrix<M> indefinite = SquareMatrix<M>::Identity();
+      indefinite(i, j) = indefinite(j, i) = 1.5;
+      EXPECT_FALSE(spd_inverse<M>(indefinite, out)) << i << "," << j;
+      EXPECT_FALSE(detail::spd_inverse_ldl<M>(indefinite, out)) << i << "," << j;
+    }
+  EXPECT_FALSE(spd_inverse<M>(-SquareMatrix<M>::Identity(), out));
+  EXPECT_FALSE(spd_inverse<M>(SquareMatrix<M>::Zero(), out));
+  // NaN or Inf in any entry of the lower triangle (the part read).
+  for (int i = 0; i < M; ++i)
+    for (int j = 0; j <= i; ++j)
+      for (double bad : {std::nan(""), std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()}) {
+        SquareMatrix<M> S = random_spd<M>(5, 2.0);
+        S(i, j) = S(j, i) = bad;
+        EXPECT_FALSE(spd_inverse<M>(S, out)) << i << "," << j << " " << bad;
+        EXPECT_FALSE(detail::spd_inverse_ldl<M>(S, out)) << i << "," << j << " " << bad;
+      }
+}
+
+TEST(WindowAlgebra, SpdInverseEqualsEigenAndRefusesWhatIsNotPositiveDefinite) {
+  // 4 x 4 takes the 2 x 2 block formula (the UWB smoother's state), the others LDL'.
+  expect_spd_inverse_matches_eigen<1>();
+  expect_spd_inverse_matches_eigen<2>();
+  expect_spd_inverse_matches_eigen<3>();
+  expect_spd_inverse_matches_eigen<4>();
+  expect_spd_inverse_matches_eigen<6>();
 }
 
 TEST(WindowAlgebra, EkfUpdateEqualsOneGaussNewtonStep) {

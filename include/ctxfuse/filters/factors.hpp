@@ -17,6 +17,7 @@ namespace ctxfuse {
 /// on the state; a model whose R does is linearised there, as an EKF would).
 template <int N, class Meas>
 struct MeasurementFactor {
+  using Model = Meas;
   static constexpr int dim = Meas::dim;
   static constexpr std::array<int, 1> slot_dims{N};
   Meas model{};
@@ -78,12 +79,29 @@ struct MotionFactor {
     if (J1) J1->noalias() = W * D_next;
     return W * d;
   }
+  /// x1 - f(x0) before whitening (r = W times it): what AffineFactorBlocks works from. Only
+  /// for a model without its own difference.
+  Vector<dim> unwhitened(const Vector<dim>& x0, const Vector<dim>& x1) const
+    requires(!requires(const Vector<dim>& a, SquareMatrix<dim>* J) { model.difference(a, a, J, J); })
+  {
+    return x1 - model.predict(x0, input, dt, nullptr);
+  }
   template <class T>
   Vector<dim, T> residual(const Vector<dim, T>& x0, const Vector<dim, T>& x1) const {
     const Vector<dim, T> pred = model.template value<T>(x0, input, dt);
     return W.template cast<T>() * difference<Model, T>(model, x1, pred);
   }
 };
+
+/// A process model that declares (`static constexpr bool affine_in_state = true`) that
+/// f(x, u, dt) = F(u, dt) x + b(u, dt) with F independent of x, and whose difference is plain
+/// subtraction: its motion factor's Jacobians are then constants of the factor, and a solver
+/// may form their J'J blocks once (AffineFactorBlocks) instead of at every linearisation.
+/// tests/factors/factor_jacobian_test.cpp checks the declaration of each model that makes it.
+template <class M>
+concept AffineProcessModel =
+    VectorProcessModel<M> && requires { requires M::affine_in_state; } &&
+    !requires(const M& m, const Vector<M::dim>& a, SquareMatrix<M::dim>* J) { m.difference(a, a, J, J); };
 
 /// Checks dt, the input and Q as an EKF prediction does, then whitens with Q at x_lin.
 template <VectorProcessModel Model>

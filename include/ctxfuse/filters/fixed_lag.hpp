@@ -32,6 +32,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #include "ctxfuse/core/block_tridiagonal.hpp"
 #include "ctxfuse/core/factor.hpp"
@@ -99,10 +100,18 @@ class FixedLagSmoother {
   using Input = typename Motion::Input;
   using Measurements = EpochMeasurements<Meas, C>;
 
+  /// An affine motion model's factor has constant Jacobians: their J'J blocks are formed once,
+  /// when the factor is made, instead of at every linearisation of the window (K - 1 factors,
+  /// about four linearisations per step).
+  static constexpr bool affine_motion = AffineProcessModel<Motion>;
+  struct NoMotionBlocks {};
+  using MotionBlocks = std::conditional_t<affine_motion, AffineFactorBlocks<dim>, NoMotionBlocks>;
+
   struct Epoch {
     double time = 0.0;
     State x = State::Zero();
     MotionFactor<Motion> motion{};  // from the previous epoch; unused in the oldest slot
+    [[no_unique_address]] MotionBlocks motion_blocks{};
     std::array<MeasurementFactor<dim, Meas>, C> factors{};
     int factor_count = 0;           // attached measurements, compacted to the front
   };
@@ -155,6 +164,8 @@ class FixedLagSmoother {
     added.time = t;
     added.x = motion_.predict(x_prev, u, t - time(), nullptr);
     if (!all_finite(added.x)) return Status::failure(Problem::non_finite_prediction);
+    if constexpr (affine_motion)
+      if (!added.motion_blocks.compute(added.motion, x_prev, added.x)) return Status::failure(Problem::non_finite_prediction);
     if (Status s = attach(meas, added.x, added); !s) return s;
 
     Window& next = spare();
@@ -226,7 +237,12 @@ class FixedLagSmoother {
       const auto k = static_cast<std::size_t>(i);
       const Epoch& e = w.epochs[k];
       for (int j = 0; j < e.factor_count && ok; ++j) ok = sys.add(e.factors[static_cast<std::size_t>(j)], i, xs[k]);
-      if (i > 0 && ok) ok = sys.add(e.motion, i - 1, xs[k - 1], xs[k]);
+      if (i > 0 && ok) {
+        if constexpr (affine_motion)
+          ok = sys.add(e.motion, e.motion_blocks, i - 1, xs[k - 1], xs[k]);
+        else
+          ok = sys.add(e.motion, i - 1, xs[k - 1], xs[k]);
+      }
     }
     return ok;
   }

@@ -37,6 +37,7 @@ struct ConstantVelocity {
   static constexpr int dim = L::size;
   using State = Vector<dim>;
   using Input = NoInput;
+  static constexpr bool affine_in_state = true;  // F depends on dt only
 
   double accel_psd = 1.0;
 
@@ -72,6 +73,7 @@ struct AccelerationDriven {
   static constexpr int dim = L::size;
   using State = Vector<dim>;
   using Input = Vector<D>;
+  static constexpr bool affine_in_state = true;  // F depends on dt only; a enters as an offset
 
   double accel_psd = 1.0;           // [m^2/s^3]
   double max_abs_accel = 200.0;     // [m/s^2] beyond this a sample is broken, not motion

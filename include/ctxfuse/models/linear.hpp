@@ -13,6 +13,7 @@ struct LinearProcess {
   static constexpr int dim = N;
   using State = Vector<N>;
   using Input = std::conditional_t<U == 0, NoInput, Vector<U>>;
+  static constexpr bool affine_in_state = true;
 
   SquareMatrix<N> F = SquareMatrix<N>::Identity();
   Matrix<N, (U == 0 ? 1 : U)> B = Matrix<N, (U == 0 ? 1 : U)>::Zero();

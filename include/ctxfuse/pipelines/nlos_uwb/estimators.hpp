@@ -23,8 +23,10 @@
 
 #include <cmath>
 #include <span>
+#include <string_view>
 #include <type_traits>
 
+#include "ctxfuse/core/block_sparsity.hpp"
 #include "ctxfuse/core/gaussian.hpp"
 #include "ctxfuse/core/layout.hpp"
 #include "ctxfuse/core/status.hpp"
@@ -42,6 +44,7 @@ using PlanarLayout = Layout<Block<"p", 2>, Block<"v", 2>>;
 /// at a known 3-D position: z = |(p, h) - a| + noise.
 struct RangeAtHeight {
   static constexpr int dim = 1;
+  static constexpr auto jacobian_columns = column_pattern<PlanarLayout>({std::string_view("p")});
   Eigen::Vector3d anchor = Eigen::Vector3d::Zero();
   double tag_height = 0.0;
   double sigma = 0.1;
