@@ -189,7 +189,7 @@ TEST(CliDemo, SummaryJsonAndSectionsNotBuilt) {
   for (auto pos = r.out.find(": not built\n"); pos != std::string::npos; pos = r.out.find(": not built\n", pos + 1)) ++not_built;
   EXPECT_EQ(in_json + not_built, 5) << r.out;
   // Paper C's sections: the protocol's tables beside the paper's and the indicative timing.
-  for (const char* key : {"\"nlos_share\"", "\"identification\"", "\"svm_vu\"", "\"graph_paper_rule\"", "\"imu_only\"",
+  for (const char* key : {"\"nlos_share\"", "\"identification\"", "\"svm_vu\"", "\"graph_paper_rule\"", "\"graph_imu_paper_rule\"", "\"imu_only\"",
                           "\"cdf_east_m\"", "\"total_paper\"", "\"indicative\""})
     EXPECT_NE(json.find(key), std::string::npos) << key;
   EXPECT_NE(r.out.find("SVM (v_u, v_i)"), std::string::npos) << r.out;
@@ -274,7 +274,7 @@ TEST(CliDemo, PlotsArePngFilesOrAClearMessage) {
     for (const auto& p : err.at("left-out epochs")) EXPECT_NE(std::find(e.begin(), e.end(), p), e.end()) << p.first;
   }
   const auto cdf = t::expect_plot(dir, "nlos_uwb_error_cdf");
-  for (const char* name : {"graph_gate_paper_rule", "least_squares", "graph", "graph_paper_rule", "ekf_gate_paper_rule"}) {
+  for (const char* name : {"graph_gate_paper_rule", "least_squares", "graph", "graph_paper_rule", "graph_imu_paper_rule", "ekf_gate_paper_rule"}) {
     ASSERT_TRUE(cdf.count(name)) << name;
     EXPECT_EQ(static_cast<double>(cdf.at(name).size()), doc.at("nlos_uwb").at("positioning").at(name).at("count").get<double>()) << name;
   }

@@ -1,8 +1,9 @@
 // A 10-minute UWB replay for the pipeline's fixed-lag smoother (pipelines/nlos_uwb/smoother.hpp):
 // a tag on a 20 m circle at 3 m/s inside 4 anchors (2 m high, tag at 1 m), one epoch of 4
 // ranges every 0.1 s (6000 epochs), sigma 0.1 m, each range drawn afresh (no repeated noise);
-// every 7th range is left out by the mask, so the slots change from epoch to epoch. Shared by
-// the no-allocation test (tests/factors) and bench_fixed_lag's replay benchmark.
+// every 7th range is left out by the mask, so the slots change from epoch to epoch; and the
+// circle's IMU for the smoother with IMU factors. Shared by the no-allocation tests
+// (tests/factors) and bench_fixed_lag's replay benchmarks.
 #pragma once
 
 #include <array>
@@ -45,6 +46,33 @@ struct UwbReplay {
   /// The start: the true position at t = 0 with 0.3 m sigma, velocity unknown (settings).
   Eigen::Vector2d start_position() const { return {radius, 0.0}; }
   Eigen::Matrix2d start_cov() const { return Eigen::Matrix2d::Identity() * 0.09; }
+
+  /// The circle's IMU (body forward-left-up): yaw rate v / r, the centripetal v^2 / r to the
+  /// left, gravity's reaction up; for the smoother with IMU factors (imu_smoother.hpp).
+  static io::ImuSample imu() {
+    io::ImuSample u;
+    u.gyro = Eigen::Vector3d(0.0, 0.0, speed / radius);
+    u.accel = Eigen::Vector3d(0.0, speed * speed / radius, 9.81);
+    return u;
+  }
+  static Eigen::Vector2d on_circle(double t) {
+    const double phi = speed * t / radius;
+    return {radius * std::cos(phi), radius * std::sin(phi)};
+  }
+  /// Starts an IMU smoother by alignment from the true positions at the epochs' times; the
+  /// index of the first epoch after the start (epochs.size() when it never starts).
+  template <class S>
+  std::size_t align(S& s) const {
+    std::size_t k = 0;
+    for (; k < epochs.size() && !s.started(); ++k) (void)s.start(epochs[k][0].t, on_circle(epochs[k][0].t), start_cov());
+    return s.started() ? k : epochs.size();
+  }
+  /// The IMU in 10 ms pieces from imu_t to half an epoch past epoch k (the run loop sees an
+  /// epoch only when the next range arrives, so the IMU is ahead of it).
+  template <class S>
+  void feed_imu(S& s, std::size_t k, double& imu_t) const {
+    for (; imu_t < epochs[k][0].t + 0.5 * dt; imu_t += 0.01) s.add_imu(imu_t, 0.01, imu());
+  }
 
   /// Epoch k through the smoother; false when the step is refused.
   template <class S>

@@ -12,8 +12,9 @@
 // NLOS share is measured and reported, not set. The simulator's extra NLOS noise (0.3 m),
 // dropouts and ranging sigma (0.1 m, the paper's) are its defaults.
 //
-// Estimators: the pipeline's (pipelines/nlos_uwb) constant-velocity motion model stands in
-// for the IMU in the EKF and the graph (an IMU-driven motion factor is not built); "IMU only"
+// Estimators: the graph_imu* variants are the paper's graph, IMU factors between the states
+// (pipelines/nlos_uwb/imu_smoother.hpp, noise from the simulated IMU's data sheet); the other
+// graph variants and the EKF use the pipeline's constant-velocity motion model; "IMU only"
 // is the strapdown mechanisation (models/ins.hpp) of the simulated IMU from the true state at
 // the first LS fix, never corrected. The SVM is trained on other seeds' drives (training_seeds),
 // with the simulator's labels and the pipeline's own features (the EKF without NLOS handling
@@ -23,6 +24,7 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -38,6 +40,7 @@
 #include "ctxfuse/eval/position_error.hpp"
 #include "ctxfuse/eval/trajectory.hpp"
 #include "ctxfuse/models/ins.hpp"
+#include "ctxfuse/pipelines/nlos_uwb/imu_smoother.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/run.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/smoother.hpp"
 #include "ctxfuse/sim/drive.hpp"
@@ -116,7 +119,7 @@ struct NlosSimReport {
   }
 };
 
-inline constexpr std::array<std::string_view, 9> kNlosSimVariants{
+inline constexpr std::array<std::string_view, 12> kNlosSimVariants{
     "imu_only",                  // strapdown from the true state at the span start
     "least_squares",             // snapshot LS per epoch
     "graph",                     // fixed-lag graph, every range (no NLOS handling, no gate)
@@ -125,7 +128,10 @@ inline constexpr std::array<std::string_view, 9> kNlosSimVariants{
     "graph_gate_paper_rule",     // the gated graph with the paper's rule
     "graph_gate_per_range",      // the per-range extension
     "ekf_gate_paper_rule",       // the EKF variant of the gated fusion
-    "ekf_gate"};
+    "ekf_gate",
+    "graph_imu",                 // IMU factors between the states: every range, no gate
+    "graph_imu_paper_rule",      // IMU factors, the paper's rule, no gate (the paper's proposed)
+    "graph_imu_gate_paper_rule"};  // IMU factors, the gate and the paper's rule
 
 /// The SVM's training rows of one simulated drive: the pipeline's features with truth labels.
 inline void append_sim_svm_rows(const sim::Drive& d, const pipelines::nlos_uwb::Settings& s, pipelines::nlos_uwb::LabelledSvmRows& rows) {
@@ -196,6 +202,18 @@ inline std::vector<TimedPosition> imu_only_track(const sim::Drive& d, double t0,
   return out;
 }
 
+/// The IMU fusion's error model from the simulated IMU's data sheet (its configuration): the
+/// figures a data sheet states, nothing measured from the run.
+inline pipelines::nlos_uwb::ImuFusionSettings imu_fusion_settings(const sim::ImuConfig& c) {
+  pipelines::nlos_uwb::ImuFusionSettings s;
+  s.accel_noise_density = c.accel_noise_density;
+  s.gyro_noise_density = c.gyro_noise_density;
+  s.accel_bias_sigma = c.accel_bias_sigma;
+  s.gyro_bias_sigma = c.gyro_bias_sigma;
+  s.bias_tau_s = std::min(c.accel_bias_tau_s, c.gyro_bias_tau_s);
+  return s;
+}
+
 /// Runs the protocol on the drive of `base` (its route, IMU, sensors) at `seed`: trains both
 /// SVMs on the training seeds' drives, runs every variant on the evaluated drive and scores it.
 inline NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::uint64_t seed, const NlosSimProtocol& protocol = {},
@@ -257,6 +275,15 @@ inline NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::ui
   add_run(kNlosSimVariants[6], nu::run(rs, nu::RangeSmoother<>(s), nu::PerRangeRule{}, classifier, s));
   add_run(kNlosSimVariants[7], nu::run(rs, nu::RangeEkf<>(s), nu::PaperEpochRule{}, classifier, s));
   add_run(kNlosSimVariants[8], nu::run(rs, nu::RangeEkf<>(s), nu::NoNlosHandling{}, classifier, s));
+  std::vector<io::ImuSample> imu;
+  imu.reserve(d.imu.size());
+  for (const auto& u : d.imu) imu.push_back({u.t, u.gyro, u.accel, false});
+  const nu::ImuFusionSettings sheet = imu_fusion_settings(d.config.imu);
+  using ImuGraph = nu::ImuRangeSmoother<10, NoGate>;
+  add_run(kNlosSimVariants[9], nu::run(std::span<const io::ImuSample>(imu), rs, ImuGraph(s, sheet), nu::NoNlosHandling{}, classifier, s));
+  add_run(kNlosSimVariants[10], nu::run(std::span<const io::ImuSample>(imu), rs, ImuGraph(s, sheet), nu::PaperEpochRule{}, classifier, s));
+  add_run(kNlosSimVariants[11], nu::run(std::span<const io::ImuSample>(imu), rs, nu::ImuRangeSmoother<>(s, sheet), nu::PaperEpochRule{},
+                                        classifier, s));
   score_identification(rep.proposed, lr, rep.svm_vu_model, rep);
   return rep;
 }

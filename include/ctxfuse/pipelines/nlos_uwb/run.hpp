@@ -1,5 +1,6 @@
-// The run loop of the NLOS-robust UWB pipeline on io::replay (no IMU stream: the estimator's
-// motion model predicts from the range times). Ranges are grouped into epochs (one range per
+// The run loop of the NLOS-robust UWB pipeline on io::replay (without an IMU stream the estimator's
+// motion model predicts from the range times; with one, `run(imu, ranges, ...)` hands each
+// piece of it to the estimator's add_imu, imu_smoother.hpp). Ranges are grouped into epochs (one range per
 // anchor within settings.epoch_window_s of the epoch's first); for each epoch:
 //   1. the estimator predicts to the epoch's first range; its speed is the classifiers' v_i;
 //   2. every range gets a verdict (classifier.hpp), attached or not, so the per-anchor range
@@ -251,6 +252,36 @@ Track run(std::span<const io::UwbRange> ranges, Estimator estimator, const Polic
   EpochAssembler<EpochProcessor<Estimator, Policy>> epochs(s.epoch_window_s, process);
   RangeHandler<decltype(epochs)> handler{epochs};
   io::replay(handler, std::span<const io::ImuSample>(), ranges);
+  epochs.flush();
+  return track;
+}
+
+/// The replay handler with an IMU stream: the estimator takes each piece of it (add_imu) with
+/// the time it starts, which the handler keeps from the samples' stamps and the spans.
+template <class Assembler, class Estimator>
+struct ImuRangeHandler {
+  Assembler& assembler;
+  Estimator& estimator;
+  double now = std::numeric_limits<double>::quiet_NaN();
+  void on(const io::ImuSample& u) { now = u.t; }  // replay: after the propagation to its stamp
+  void propagate(const io::ImuSample& u, double dt) {
+    estimator.add_imu(now, dt, u);
+    now += dt;
+  }
+  void on(const io::UwbRange& r) { assembler.on(r); }
+};
+
+/// Runs an estimator that takes an IMU stream (add_imu) over the IMU and range streams.
+template <class Estimator, NlosPolicy Policy>
+  requires requires(Estimator& e, const io::ImuSample& u) { e.add_imu(0.0, 0.0, u); }
+Track run(std::span<const io::ImuSample> imu, std::span<const io::UwbRange> ranges, Estimator estimator, const Policy& policy,
+          NlosClassifier classifier, const Settings& s) {
+  Track track;
+  track.ranges.reserve(ranges.size());
+  EpochProcessor<Estimator, Policy> process(s, estimator, policy, classifier, track);
+  EpochAssembler<EpochProcessor<Estimator, Policy>> epochs(s.epoch_window_s, process);
+  ImuRangeHandler<decltype(epochs), Estimator> handler{epochs, estimator};
+  io::replay(handler, imu, ranges);
   epochs.flush();
   return track;
 }

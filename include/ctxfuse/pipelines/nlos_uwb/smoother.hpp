@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <span>
 #include <type_traits>
 #include <utility>
@@ -25,6 +26,80 @@
 #include "ctxfuse/pipelines/nlos_uwb/estimators.hpp"
 
 namespace ctxfuse::pipelines::nlos_uwb {
+
+/// The EKF's checks and NIS test of one range (model h) against a predicted state (x, P):
+/// what the smoothers apply before a range enters the window.
+template <class Model, int N>
+Status gate_range(const Settings& s, double threshold, const Model& h, const io::UwbRange& r, const Vector<N>& x,
+                  const SquareMatrix<N>& P) {
+  if (!r.anchor_position.allFinite() || !std::isfinite(r.range_m)) return Status::invalid(Problem::non_finite_measurement);
+  if (!(r.range_m > 0.0 && r.range_m <= s.max_range_m)) return Status::invalid(Problem::measurement_out_of_domain);
+  Matrix<1, N> H;
+  const double y = r.range_m - h.predict(x, &H)(0);
+  const double S = (H * P * H.transpose())(0, 0) + h.sigma * h.sigma;
+  if (!(S > 0.0) || !std::isfinite(y)) return Status::failure(Problem::innovation_not_positive_definite);
+  Status st;
+  st.dof = 1;
+  st.nis = y * y / S;
+  st.gate_threshold = threshold;
+  if (!(st.nis <= st.gate_threshold)) st.outcome = Outcome::gated;
+  return st;
+}
+
+/// The smoothers add states only with an epoch: predict_to only checks the clock.
+inline Status smoother_clock_check(bool started, double now, double t) {
+  if (!started) return Status::invalid(Problem::time_not_set);
+  if (!std::isfinite(t)) return Status::invalid(Problem::non_finite_dt);
+  return t < now ? Status::invalid(Problem::out_of_order_time) : Status{};
+}
+
+/// What every smoother checks before an epoch: a status to return at once, or none to go on
+/// with a step of dt > 0 to the epoch's last range. An epoch whose ranges all share the start's
+/// time (a simulator, or a system stamping the epoch once) is the epoch the start's fix was
+/// computed from: its ranges are in the prior, and it is accepted without a step.
+inline std::optional<Status> smoother_epoch_check(bool started, bool& fresh, double now, int slots,
+                                                  std::span<const io::UwbRange> epoch, std::span<Status> statuses) {
+  if (!started) return Status::invalid(Problem::time_not_set);
+  if (static_cast<int>(epoch.size()) > slots) return Status::invalid(Problem::measurement_count_above_capacity);
+  const double dt = epoch.back().t - now;
+  if (std::exchange(fresh, false) && dt == 0.0) {
+    for (std::size_t i = 0; i < epoch.size(); ++i) statuses[i] = Status{};
+    return Status{};
+  }
+  if (!(dt > 0.0)) return Status::invalid(dt == 0.0 ? Problem::non_positive_dt : Problem::out_of_order_time);
+  return std::nullopt;
+}
+
+/// The epoch's attached ranges through the gate against the prediction (x, P), then one step
+/// of `smoother` to the epoch's last range with input u; a refused step is every gated-in
+/// range's status too. `range(r)` makes the measurement model of range r.
+template <class S, class MakeRange>
+Status gated_smoother_step(S& smoother, const Settings& s, double gate_threshold, MakeRange&& range,
+                           const typename S::Input& u, const Vector<S::dim>& x, const SquareMatrix<S::dim>& P,
+                           std::span<const io::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
+  typename S::Measurements meas;
+  for (std::size_t i = 0; i < epoch.size(); ++i) {
+    const auto h = range(epoch[i]);
+    bool enter = attach[i];
+    if (enter) {
+      statuses[i] = gate_range(s, gate_threshold, h, epoch[i], x, P);
+      enter = statuses[i].accepted();
+    }
+    meas.add(h, Vector<1>(epoch[i].range_m), enter);
+  }
+  const Status st = smoother.step(epoch.back().t, u, meas);
+  if (!st.accepted())
+    for (std::size_t i = 0; i < epoch.size(); ++i)
+      if (attach[i] && statuses[i].accepted()) statuses[i] = st;
+  return st;
+}
+
+/// The window's state `lag` epochs before the newest (the oldest kept while the window fills).
+template <class S>
+const auto& lagged_epoch(const S& smoother, int lag) {
+  const auto& w = smoother.window();
+  return w.epochs[static_cast<std::size_t>(std::max(0, w.size - 1 - lag))];
+}
 
 template <int K = 10, GatePolicy Gate = ChiSquareGate, int OutputLag = 0>
 class RangeSmoother {
@@ -59,42 +134,16 @@ class RangeSmoother {
   }
 
   /// The smoother adds states only with an epoch: here only the clock is checked.
-  Status predict_to(double t) const {
-    if (!started_) return Status::invalid(Problem::time_not_set);
-    if (!std::isfinite(t)) return Status::invalid(Problem::non_finite_dt);
-    return t < time() ? Status::invalid(Problem::out_of_order_time) : Status{};
-  }
+  Status predict_to(double t) const { return smoother_clock_check(started_, time(), t); }
 
   Status apply_epoch(std::span<const io::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
-    if (!started_) return Status::invalid(Problem::time_not_set);
-    if (static_cast<int>(epoch.size()) > kSlots) return Status::invalid(Problem::measurement_count_above_capacity);
-    const double t = epoch.back().t, dt = t - time();
-    // An epoch whose ranges all share the start's time (a simulator, or a system stamping the
-    // epoch once) is the epoch the start's fix was computed from: its ranges are in the prior.
-    if (std::exchange(fresh_, false) && dt == 0.0) {
-      for (std::size_t i = 0; i < epoch.size(); ++i) statuses[i] = Status{};
-      return Status{};
-    }
-    if (!(dt > 0.0)) return Status::invalid(dt == 0.0 ? Problem::non_positive_dt : Problem::out_of_order_time);
+    if (auto done = smoother_epoch_check(started_, fresh_, time(), kSlots, epoch, statuses)) return *done;
+    const double dt = epoch.back().t - time();
     SquareMatrix<4> F;
     const Vector<4> x = smoother_.motion().predict(smoother_.newest(), NoInput{}, dt, &F);
     const SquareMatrix<4> P = F * smoother_.newest_covariance() * F.transpose() + smoother_.motion().noise(x, NoInput{}, dt);
-    typename Smoother::Measurements meas;
-    for (std::size_t i = 0; i < epoch.size(); ++i) {
-      const io::UwbRange& r = epoch[i];
-      const RangeAtHeight h{r.anchor_position, settings_.tag_height_m, settings_.range_sigma_m};
-      bool enter = attach[i];
-      if (enter) {
-        statuses[i] = gate(h, r, x, P);
-        enter = statuses[i].accepted();
-      }
-      meas.add(h, Vector<1>(r.range_m), enter);
-    }
-    const Status s = smoother_.step(t, NoInput{}, meas);
-    if (!s.accepted())
-      for (std::size_t i = 0; i < epoch.size(); ++i)
-        if (attach[i] && statuses[i].accepted()) statuses[i] = s;
-    return s;
+    auto range = [&](const io::UwbRange& r) { return RangeAtHeight{r.anchor_position, settings_.tag_height_m, settings_.range_sigma_m}; };
+    return gated_smoother_step(smoother_, settings_, gate_.threshold(1), range, NoInput{}, x, P, epoch, attach, statuses);
   }
 
   const Smoother& smoother() const { return smoother_; }
@@ -106,26 +155,7 @@ class RangeSmoother {
     return m;
   }
 
-  /// The EKF's checks and NIS test of one range against the predicted state.
-  Status gate(const RangeAtHeight& h, const io::UwbRange& r, const Vector<4>& x, const SquareMatrix<4>& P) const {
-    if (!r.anchor_position.allFinite() || !std::isfinite(r.range_m)) return Status::invalid(Problem::non_finite_measurement);
-    if (!(r.range_m > 0.0 && r.range_m <= settings_.max_range_m)) return Status::invalid(Problem::measurement_out_of_domain);
-    Matrix<1, 4> H;
-    const double y = r.range_m - h.predict(x, &H)(0);
-    const double S = (H * P * H.transpose())(0, 0) + h.sigma * h.sigma;
-    if (!(S > 0.0) || !std::isfinite(y)) return Status::failure(Problem::innovation_not_positive_definite);
-    Status st;
-    st.dof = 1;
-    st.nis = y * y / S;
-    st.gate_threshold = gate_.threshold(1);
-    if (!(st.nis <= st.gate_threshold)) st.outcome = Outcome::gated;
-    return st;
-  }
-
-  const typename Smoother::Epoch& lagged() const {
-    const auto& w = smoother_.window();
-    return w.epochs[static_cast<std::size_t>(std::max(0, w.size - 1 - OutputLag))];
-  }
+  const typename Smoother::Epoch& lagged() const { return lagged_epoch(smoother_, OutputLag); }
 
   Settings settings_;
   Smoother smoother_;

@@ -116,7 +116,7 @@ class DynamicAligner {
     first_ = (first_ + 1) % kCapacity;
     --count_;
   }
-  const Settings& s_;
+  Settings s_;  // a copy: an aligner may outlive (or be copied away from) the settings it was made from
   std::array<Fix, kCapacity> ring_{};
   std::size_t first_ = 0, count_ = 0;
 };

@@ -1,0 +1,243 @@
+// The NLOS-robust UWB smoother with IMU factors (the paper's graph): one window state per
+// epoch as in RangeSmoother (smoother.hpp), but the planar IMU state (models/planar.hpp:
+// position, velocity, heading, yaw-rate bias, forward/lateral accelerometer bias) and, between
+// consecutive states, the IMU factor of the samples in force over the interval
+// (models/planar_interval.hpp) instead of a constant-velocity motion factor.
+//
+// The IMU stream reaches the estimator through add_imu (run.hpp's IMU overload of `run`), as
+// pieces (sample, start, span) that io::replay cuts at measurement times; an epoch's interval
+// is assembled from the pieces between the previous state's time and its own. A refused sample
+// (non-finite, absurd rates) is replaced by the last accepted one over its span (HeldInput's
+// rule), and a stretch without pieces is covered by the sample before it.
+//
+// Start: a planar IMU state needs a heading, which one snapshot fix does not give; start()
+// offers each fix to a dynamic aligner (pipelines/region_imm/alignment.hpp: the heading of the
+// longest baseline of fixes > align_min_distance_m apart) and the smoother starts at the fix
+// that completes it. Until then start() refuses with Problem::time_not_set and the run loop
+// offers the next epoch's fix.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <span>
+#include <utility>
+
+#include "ctxfuse/core/gaussian.hpp"
+#include "ctxfuse/core/status.hpp"
+#include "ctxfuse/filters/fixed_lag.hpp"
+#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/models/planar.hpp"
+#include "ctxfuse/models/planar_interval.hpp"
+#include "ctxfuse/pipelines/nlos_uwb/estimators.hpp"
+#include "ctxfuse/pipelines/nlos_uwb/smoother.hpp"
+#include "ctxfuse/pipelines/region_imm/alignment.hpp"
+
+namespace ctxfuse::pipelines::nlos_uwb {
+
+/// The IMU's error model (from its data sheet) and the start. The defaults are the data sheet
+/// of the simulator's consumer MEMS IMU (sim/config.hpp ImuConfig); a recording with another IMU
+/// sets its own sheet's figures. Bias instabilities given as first-order Gauss-Markov
+/// processes (sigma, tau) enter as random walks of the same short-term growth,
+/// sigma sqrt(2 / tau).
+struct ImuFusionSettings {
+  double accel_noise_density = 1.0e-3;  // [m/s^2/sqrt(Hz)] white specific-force noise
+  double gyro_noise_density = 8.7e-5;   // [rad/s/sqrt(Hz)]
+  double accel_bias_sigma = 0.02;       // [m/s^2] turn-on bias, 1 sigma
+  double gyro_bias_sigma = 8.7e-5;      // [rad/s]
+  double bias_tau_s = 300.0;            // Gauss-Markov correlation time of both biases
+  // Alignment (region_imm::DynamicAligner): the heading of two snapshot fixes at least
+  // align_min_distance_m apart within align_max_span_s, once the fixes' covariances put its
+  // 1-sigma below align_max_heading_sigma_deg; the velocity over >= align_velocity_baseline_s.
+  // The floors of the aligned belief: the vehicle may turn or change speed between the fixes.
+  double align_min_distance_m = 5.0;
+  double align_max_span_s = 10.0;
+  double align_max_heading_sigma_deg = 5.0;
+  double align_velocity_baseline_s = 1.0;
+  double init_velocity_sigma_mps = 0.2;
+  double init_heading_sigma_deg = 2.0;
+
+  models::PlanarImuModel model() const {
+    models::PlanarImuModel m;
+    m.accel_noise_density = accel_noise_density;
+    m.gyro_noise_density = gyro_noise_density;
+    m.accel_bias_walk = accel_bias_sigma * std::sqrt(2.0 / bias_tau_s);
+    m.gyro_bias_walk = gyro_bias_sigma * std::sqrt(2.0 / bias_tau_s);
+    return m;
+  }
+  /// The region pipeline's settings that its aligner and initial belief read.
+  region_imm::Settings alignment(const Settings& s) const {
+    region_imm::Settings a;
+    a.align_min_distance_m = align_min_distance_m;
+    a.align_max_span_s = align_max_span_s;
+    a.align_max_heading_sigma_deg = align_max_heading_sigma_deg;
+    a.align_velocity_baseline_s = align_velocity_baseline_s;
+    a.init_position_sigma = s.range_sigma_m;  // floor only: the fix's own covariance is used
+    a.init_velocity_sigma = init_velocity_sigma_mps;
+    a.init_heading_sigma_deg = init_heading_sigma_deg;
+    a.init_gyro_bias_sigma = gyro_bias_sigma;
+    a.init_accel_bias_sigma = accel_bias_sigma;
+    return a;
+  }
+};
+
+/// The IMU pieces not yet consumed by a state, oldest first, in a ring of fixed capacity (the
+/// oldest are dropped when it is full: only pieces after the newest state are ever needed).
+class ImuPieces {
+ public:
+  static constexpr int kCapacity = 128;  // 1.28 s at 100 Hz; an epoch needs ~0.15 s of them
+
+  /// Appends one piece (sample u in force over [t, t + span)); a refused sample is replaced by
+  /// the last accepted one, and dropped when there is none.
+  void add(double t, double span, const models::PlanarImu& u, const models::PlanarImuModel& m) {
+    if (!std::isfinite(t) || !(span > 0.0) || !std::isfinite(span)) return;
+    const bool ok = u.is_finite() && m.check_input(u) == Problem::none;
+    if (ok) {
+      last_ = u;
+      has_last_ = true;
+    } else if (!has_last_) {
+      return;
+    }
+    if (count_ == kCapacity) drop_oldest();
+    ring_[index(count_++)] = Piece{t, span, ok ? u : last_};
+  }
+
+  /// The samples in force over [t0, t1] (a stretch without pieces is covered by the sample
+  /// before it, or after it at the start); false when no piece reaches the interval.
+  template <int C>
+  bool interval(double t0, double t1, models::PlanarImuInterval<C>& out) const {
+    out.clear();
+    constexpr double kMinSpan = 1e-9;  // replay's accumulated clock meets range stamps to ~1e-15 s
+    double cursor = t0;
+    const models::PlanarImu* held = nullptr;
+    for (int k = 0; k < count_ && cursor < t1 - kMinSpan; ++k) {
+      const Piece& p = ring_[index(k)];
+      const double end = p.t + p.span;
+      if (end <= cursor + kMinSpan) {
+        held = &p.u;
+        continue;
+      }
+      if (p.t >= t1) break;
+      if (p.t > cursor + kMinSpan) out.add(held ? *held : p.u, p.t - cursor);
+      cursor = std::max(cursor, p.t);
+      const double stop = std::min(end, t1);
+      if (stop > cursor) out.add(p.u, stop - cursor);
+      cursor = stop;
+      held = &p.u;
+    }
+    if (!held) return false;
+    if (cursor < t1 - kMinSpan) out.add(*held, t1 - cursor);
+    return out.count > 0;
+  }
+
+  /// Forgets the pieces that end at or before t (kept: the one in force at t).
+  void drop_before(double t) {
+    while (count_ > 1 && ring_[index(0)].t + ring_[index(0)].span <= t) drop_oldest();
+  }
+  int size() const { return count_; }
+
+ private:
+  struct Piece {
+    double t = 0.0, span = 0.0;
+    models::PlanarImu u{};
+  };
+  std::size_t index(int k) const { return static_cast<std::size_t>((first_ + k) % kCapacity); }
+  void drop_oldest() {
+    first_ = (first_ + 1) % kCapacity;
+    --count_;
+  }
+  std::array<Piece, kCapacity> ring_{};
+  int first_ = 0, count_ = 0;
+  models::PlanarImu last_{};
+  bool has_last_ = false;
+};
+
+template <int K = 10, GatePolicy Gate = ChiSquareGate, int OutputLag = 0>
+class ImuRangeSmoother {
+  static_assert(OutputLag >= 0 && OutputLag < K, "the reported state must be in the window");
+
+ public:
+  static constexpr int kSlots = 16;  // NlosClassifier::kMaxAnchors: one slot per anchor
+  static constexpr int kIntervalSamples = 32;
+  using L = models::PlanarLayout;
+  using Motion = models::PlanarImuIntervalModel<kIntervalSamples>;
+  using Smoother = FixedLagSmoother<Motion, models::PlanarRange, K, kSlots>;
+
+  ImuRangeSmoother(const Settings& s, const ImuFusionSettings& imu)
+      : settings_(s), smoother_(Motion{imu.model()}), gate_(make_gate<Gate>(s)), align_(imu.alignment(s)), aligner_(align_) {}
+
+  bool started() const { return started_; }
+  double time() const { return smoother_.time(); }
+  Eigen::Vector2d position() const { return L::get<"p">(smoother_.newest()); }
+  Eigen::Vector2d velocity() const { return L::get<"v">(smoother_.newest()); }
+  double heading() const { return smoother_.newest()(L::offset<"psi">()); }
+  void stop() {
+    started_ = false;
+    aligner_ = region_imm::DynamicAligner(align_);
+  }
+  double output_time() const { return lagged().time; }
+  Eigen::Vector2d output_position() const { return L::get<"p">(lagged().x); }
+
+  /// One piece of the IMU stream: sample `s` in force over [t, t + span).
+  void add_imu(double t, double span, const io::ImuSample& s) {
+    models::PlanarImu u;
+    u.yaw_rate = s.gyro.z();
+    u.accel = s.accel.head<2>();
+    pieces_.add(t, span, u, smoother_.motion().step);
+  }
+
+  /// Offers the fix to the aligner; starts (accepted) at the fix that completes an alignment,
+  /// refuses (time_not_set) before.
+  Status start(double t, const Eigen::Vector2d& p, const Eigen::Matrix2d& P) {
+    if (!std::isfinite(t)) return Status::invalid(Problem::non_finite_dt);
+    if (!p.allFinite() || !P.allFinite()) return Status::invalid(Problem::non_finite_measurement);
+    const auto al = aligner_.add(t, p, P);
+    if (!al) return Status::invalid(Problem::time_not_set);
+    const Status s = smoother_.initialise(al->t, region_imm::initial_belief(*al, align_));
+    started_ = s.accepted();
+    fresh_ = started_;
+    if (started_) pieces_.drop_before(al->t);
+    return s;
+  }
+
+  Status predict_to(double t) const { return smoother_clock_check(started_, time(), t); }
+
+  Status apply_epoch(std::span<const io::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
+    if (auto done = smoother_epoch_check(started_, fresh_, time(), kSlots, epoch, statuses)) return *done;
+    const double t = epoch.back().t, dt = t - time();
+    typename Motion::Input u;
+    if (!pieces_.interval(time(), t, u)) return Status::invalid(Problem::non_finite_input);
+    if (Problem p = smoother_.motion().check(u, dt); p != Problem::none) return Status::invalid(p);
+    SquareMatrix<L::size> F;
+    const Vector<L::size> x = smoother_.motion().predict(smoother_.newest(), u, dt, &F);
+    const SquareMatrix<L::size> P = F * smoother_.newest_covariance() * F.transpose() + smoother_.motion().noise(smoother_.newest(), u, dt);
+    auto range = [&](const io::UwbRange& r) {
+      models::PlanarRange h;
+      h.anchor = r.anchor_position;
+      h.tag_height = settings_.tag_height_m;
+      h.sigma = settings_.range_sigma_m;
+      return h;
+    };
+    const Status s = gated_smoother_step(smoother_, settings_, gate_.threshold(1), range, u, x, P, epoch, attach, statuses);
+    if (s.accepted()) pieces_.drop_before(t);
+    return s;
+  }
+
+  const Smoother& smoother() const { return smoother_; }
+
+ private:
+  const typename Smoother::Epoch& lagged() const { return lagged_epoch(smoother_, OutputLag); }
+
+  Settings settings_;
+  Smoother smoother_;
+  Gate gate_;
+  region_imm::Settings align_;
+  region_imm::DynamicAligner aligner_;
+  ImuPieces pieces_;
+  bool started_ = false;
+  bool fresh_ = false;
+};
+
+}  // namespace ctxfuse::pipelines::nlos_uwb
