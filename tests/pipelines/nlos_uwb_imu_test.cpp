@@ -104,4 +104,43 @@ TEST(NlosImuSmoother, StartsOnlyOnceTheFixesGiveAHeading) {
   EXPECT_EQ(est.start(1.0, Eigen::Vector2d(std::nan(""), 0.0), P).problem, Problem::non_finite_measurement);
 }
 
+TEST(NlosImuSmoother, EpochWithoutImuOrWithABrokenIntervalIsRefusedAndChangesNothing) {
+  const nu::Settings s;
+  nu::ImuRangeSmoother<> est(s, nu::ImuFusionSettings{});
+  const Eigen::Matrix2d P = Eigen::Matrix2d::Identity() * 0.01;
+  for (int k = 0; k <= 40 && !est.started(); ++k) (void)est.start(0.1 * k, Eigen::Vector2d(2.0 * 0.1 * k, 0.0), P);
+  ASSERT_TRUE(est.started());
+  const double t0 = est.time();
+  const Eigen::Vector2d p0 = est.position();
+  std::array<io::UwbRange, 3> epoch{};
+  for (int a = 0; a < 3; ++a) {
+    epoch[static_cast<std::size_t>(a)].t = t0 + 0.1;
+    epoch[static_cast<std::size_t>(a)].anchor_id = a;
+    epoch[static_cast<std::size_t>(a)].anchor_position = Eigen::Vector3d(10.0 * a, 20.0, 2.0);
+    epoch[static_cast<std::size_t>(a)].range_m = 20.0;
+  }
+  const std::array<bool, 3> attach{true, true, true};
+  std::array<Status, 3> st{};
+  // No IMU piece at all: nothing to build the factor from.
+  EXPECT_EQ(est.apply_epoch(epoch, attach, st).problem, Problem::non_finite_input);
+  EXPECT_EQ(est.time(), t0);
+  EXPECT_EQ(est.position(), p0);
+  // Only absurd samples (a 50 rad/s yaw rate): refused as pieces, so still nothing to use.
+  io::ImuSample spin;
+  spin.gyro.z() = 50.0;
+  for (int k = 0; k < 10; ++k) est.add_imu(t0 + 0.01 * k, 0.01, spin);
+  EXPECT_EQ(est.apply_epoch(epoch, attach, st).problem, Problem::non_finite_input);
+  EXPECT_EQ(est.time(), t0);
+  // Good samples then make the same epoch a step.
+  io::ImuSample rest;
+  rest.accel.z() = 9.81;
+  for (int k = 0; k < 10; ++k) est.add_imu(t0 + 0.01 * k, 0.01, rest);
+  EXPECT_TRUE(est.apply_epoch(epoch, attach, st).accepted());
+  EXPECT_DOUBLE_EQ(est.time(), t0 + 0.1);
+  // An epoch before the newest state: out of order, nothing changes.
+  for (auto& r : epoch) r.t = t0 + 0.05;
+  EXPECT_EQ(est.apply_epoch(epoch, attach, st).problem, Problem::out_of_order_time);
+  EXPECT_DOUBLE_EQ(est.time(), t0 + 0.1);
+}
+
 }  // namespace
