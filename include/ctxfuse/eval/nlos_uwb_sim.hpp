@@ -277,7 +277,7 @@ inline NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::ui
   add_run(kNlosSimVariants[8], nu::run(rs, nu::RangeEkf<>(s), nu::NoNlosHandling{}, classifier, s));
   std::vector<io::ImuSample> imu;
   imu.reserve(d.imu.size());
-  for (const auto& u : d.imu) imu.push_back({u.t, u.gyro, u.accel, false});
+  for (const auto& u : d.imu) imu.push_back(sim::imu_sample(u));
   const nu::ImuFusionSettings sheet = imu_fusion_settings(d.config.imu);
   using ImuGraph = nu::ImuRangeSmoother<10, NoGate>;
   add_run(kNlosSimVariants[9], nu::run(std::span<const io::ImuSample>(imu), rs, ImuGraph(s, sheet), nu::NoNlosHandling{}, classifier, s));

@@ -36,6 +36,8 @@ inline io::GnssFix gnss_fix(const GnssEpoch& e) {
   return f;
 }
 
+inline io::ImuSample imu_sample(const ImuSample& s) { return {s.t, s.gyro, s.accel, false}; }
+
 inline io::UwbRange uwb_range(const UwbRange& r) {
   return {r.t, r.anchor_id, r.anchor_position, r.range_m, r.rssi_dbm, r.rssi_first_path_dbm};
 }
@@ -44,7 +46,7 @@ inline io::UwbRange uwb_range(const UwbRange& r) {
 inline io::SensorLog sensor_log(const Drive& d) {
   io::SensorLog log;
   log.imu.reserve(d.imu.size());
-  for (const auto& s : d.imu) log.imu.push_back({s.t, s.gyro, s.accel, false});
+  for (const auto& s : d.imu) log.imu.push_back(imu_sample(s));
   for (const auto& e : d.gnss) {
     log.sat_epochs.push_back(sat_epoch(d, e));
     if (e.has_fix) log.gnss.push_back(gnss_fix(e));

@@ -34,6 +34,7 @@
 #include "ctxfuse/pipelines/nlos_uwb/estimators.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/smoother.hpp"
 #include "ctxfuse/pipelines/region_imm/alignment.hpp"
+#include "ctxfuse/pipelines/region_imm/models.hpp"
 
 namespace ctxfuse::pipelines::nlos_uwb {
 
@@ -166,7 +167,7 @@ class ImuRangeSmoother {
   using Smoother = FixedLagSmoother<Motion, models::PlanarRange, K, kSlots>;
 
   ImuRangeSmoother(const Settings& s, const ImuFusionSettings& imu)
-      : settings_(s), smoother_(Motion{imu.model()}), gate_(make_gate<Gate>(s)), align_(imu.alignment(s)), aligner_(align_) {}
+      : settings_(s), smoother_(Motion{imu.model()}), gate_(make_gate<Gate>(s)), aligner_(imu.alignment(s)) {}
 
   bool started() const { return started_; }
   double time() const { return smoother_.time(); }
@@ -175,17 +176,14 @@ class ImuRangeSmoother {
   double heading() const { return smoother_.newest()(L::offset<"psi">()); }
   void stop() {
     started_ = false;
-    aligner_ = region_imm::DynamicAligner(align_);
+    aligner_.reset();
   }
   double output_time() const { return lagged().time; }
   Eigen::Vector2d output_position() const { return L::get<"p">(lagged().x); }
 
   /// One piece of the IMU stream: sample `s` in force over [t, t + span).
   void add_imu(double t, double span, const io::ImuSample& s) {
-    models::PlanarImu u;
-    u.yaw_rate = s.gyro.z();
-    u.accel = s.accel.head<2>();
-    pieces_.add(t, span, u, smoother_.motion().step);
+    pieces_.add(t, span, region_imm::planar_input(s), smoother_.motion().step);
   }
 
   /// Offers the fix to the aligner; starts (accepted) at the fix that completes an alignment,
@@ -195,7 +193,7 @@ class ImuRangeSmoother {
     if (!p.allFinite() || !P.allFinite()) return Status::invalid(Problem::non_finite_measurement);
     const auto al = aligner_.add(t, p, P);
     if (!al) return Status::invalid(Problem::time_not_set);
-    const Status s = smoother_.initialise(al->t, region_imm::initial_belief(*al, align_));
+    const Status s = smoother_.initialise(al->t, region_imm::initial_belief(*al, aligner_.settings()));
     started_ = s.accepted();
     fresh_ = started_;
     if (started_) pieces_.drop_before(al->t);
@@ -233,7 +231,6 @@ class ImuRangeSmoother {
   Settings settings_;
   Smoother smoother_;
   Gate gate_;
-  region_imm::Settings align_;
   region_imm::DynamicAligner aligner_;
   ImuPieces pieces_;
   bool started_ = false;

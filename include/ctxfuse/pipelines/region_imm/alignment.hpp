@@ -48,6 +48,10 @@ class DynamicAligner {
  public:
   explicit DynamicAligner(const Settings& s) : s_(s) {}
 
+  /// Forgets every fix offered (a restart aligns afresh).
+  void reset() { first_ = count_ = 0; }
+  const Settings& settings() const { return s_; }
+
   /// Offers one fix; returns the alignment at its time when it completes a pair. Non-finite
   /// fixes and fixes not after the previous one are ignored.
   std::optional<Alignment> add(double t, const Eigen::Vector2d& p, const Eigen::Matrix2d& cov) {
