@@ -3,7 +3,9 @@
 // re-expressed at the filter's normal gravity) integrated by the filter's own simplified
 // strapdown from the true start follow the converted truth over the whole 9-minute drive. A
 // wrong axis, heading convention or gravity shows as kilometres (a 0.018 m/s^2 gravity error
-// alone gives 2.6 km of height over 540 s). Also the error statistics against their definition.
+// alone gives 2.6 km of height over 540 s). Also the error statistics against their definition,
+// and the odometer scale-factor block: its estimate against the drive's drawn scale error and
+// what it does to the garage's dead reckoning.
 #include <gtest/gtest.h>
 
 #include <iostream>
@@ -20,7 +22,7 @@ TEST(GinsSimStudy, ConvertedErrorFreeImuFollowsTheConvertedTruth) {
   cfg.imu.accel_noise_density = cfg.imu.accel_bias_sigma = cfg.imu.accel_scale_sigma = 0.0;
   const eval::GinsSimDrive d = eval::gins_sim_drive(sim::simulate_drive(cfg));
   ASSERT_GT(d.t.size(), 50000u);
-  const eval::GinsSimModel m;
+  const eval::GinsSimBaseModel m;
   models::NavState x = d.truth.front();
   double max_h = 0.0, max_v = 0.0, max_heading = 0.0;
   for (std::size_t k = 1; k < d.t.size(); ++k) {
@@ -57,6 +59,43 @@ TEST(GinsSimStudy, ErrorStatisticsFollowTheirDefinition) {
   EXPECT_EQ(h.p75, 75.0);
   EXPECT_EQ(h.max, 100.0);
   EXPECT_NEAR(h.rms, std::sqrt(100.0 * 101.0 * 201.0 / 6.0 / 100.0), 1e-12);
+}
+
+// Seed 3 draws the largest odometer scale error of seeds 1-5 (+1.69 %, 9.8 m over the garage's
+// 582 m). With the block the forward filter (constraints, fixed R) ends within 3 of its own
+// sigmas of the drawn value, its sigma well under the 1 % prior, and the garage's error falls
+// to a fraction of the 15-state filter's (the block held at zero); the RTS pass then spreads
+// the exit fixes' correction back over the garage, which it could not do for a drift the
+// covariance did not hold. Measured: estimate +0.0181 (sigma 0.0008); garage RMS 0.91 m
+// against 4.19 m forward, 0.66 against 4.58 m smoothed.
+TEST(GinsSimStudy, OdometerScaleBlockEstimatesTheDrawnScaleAndRemovesTheGarageDrift) {
+  sim::DriveConfig cfg;
+  cfg.seed = 3;
+  const sim::Drive drive = sim::simulate_drive(cfg);
+  const eval::GinsSimDrive d = eval::gins_sim_drive(drive);
+  ASSERT_NEAR(d.speed_scale_truth, 0.0169, 5e-5);
+  ASSERT_EQ(d.speed_scale_sigma, cfg.speed.scale_sigma);
+  const auto p = eval::true_scene_probabilities(eval::scene_samples(drive));  // unused by the fixed R
+  const eval::GinsSimScheme forward{"(c)", true, false, false}, smoothed{"(d)", true, false, true};
+  eval::GinsSimSettings held;
+  held.speed_scale_sigma = 0.0;
+  const policies::FixedGnssNoise fixed(2.0);
+  const eval::GinsSimRun c = eval::run_gins_sim(d, cfg.imu, forward, fixed, p);
+  const eval::GinsSimRun c15 = eval::run_gins_sim(d, cfg.imu, forward, fixed, p, held);
+  const eval::GinsSimRun dd = eval::run_gins_sim(d, cfg.imu, smoothed, fixed, p);
+  const eval::GinsSimRun d15 = eval::run_gins_sim(d, cfg.imu, smoothed, fixed, p, held);
+  std::cout << "scale " << c.speed_scale << " (" << c.speed_scale_sigma << ") drawn " << d.speed_scale_truth
+            << "; garage RMS forward " << c.indoor.rms << " vs " << c15.indoor.rms << " m, smoothed " << dd.indoor.rms << " vs "
+            << d15.indoor.rms << " m\n";
+  EXPECT_LT(std::abs(c.speed_scale - d.speed_scale_truth), 3.0 * c.speed_scale_sigma);
+  EXPECT_LT(c.speed_scale_sigma, 0.1 * cfg.speed.scale_sigma);
+  EXPECT_EQ(c15.speed_scale, 0.0);
+  EXPECT_EQ(c15.speed_scale_sigma, 0.0);
+  EXPECT_LT(c.indoor.rms, 0.3 * c15.indoor.rms);
+  ASSERT_TRUE(dd.smoothed);
+  ASSERT_TRUE(d15.smoothed);  // the held block does not stop the RTS pass
+  EXPECT_LT(dd.indoor.rms, 0.8 * c.indoor.rms);
+  EXPECT_LT(dd.indoor.rms, 0.2 * d15.indoor.rms);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // Every measurement Jacobian of the geodetic INS against central differences on the manifold:
 // column i of H is d residual(h(x [+] e), h(x)) / d e_i at e = 0, on the 15-state and the
-// augmented 20-state layouts (where the lever arm and mounting blocks have columns too).
+// augmented 20-state layouts (where the lever arm and mounting blocks have columns too), and
+// with an odometer scale-factor block.
 #include <gtest/gtest.h>
 
 #include "ctxfuse/models/ins_updates.hpp"
@@ -66,6 +67,24 @@ void check_all(const Model& model, const typename Model::State& x) {
 TEST(GinsJacobians, EveryMeasurementOnTheFifteenStateLayout) { check_all(test::Nav15{}, test::sample_nav_state()); }
 
 TEST(GinsJacobians, EveryMeasurementOnTheAugmentedLayout) { check_all(test::Nav20{}, test::sample_nav20_state()); }
+
+TEST(GinsJacobians, EveryMeasurementWithAnOdometerScaleBlock) { check_all(test::Nav16{}, test::sample_nav16_state()); }
+
+// The scale block enters the forward speed only: (1 + k) u_0, and its column is u_0.
+TEST(GinsJacobians, OdometerScaleScalesTheForwardSpeedOnly) {
+  const test::Nav16::State x = test::sample_nav16_state();
+  NonHolonomicWithSpeed<test::Nav16::State> scaled;
+  NonHolonomicWithSpeed<models::NavState> plain;
+  scaled.vehicle.gyro = plain.vehicle.gyro = {0.05, 0.02, 0.3};
+  const Vector<3> u = plain.predict(test::Nav16::base_part(x), nullptr);
+  Matrix<3, 16> H;
+  const Vector<3> z = scaled.predict(x, &H);
+  EXPECT_NEAR(z(0), 1.013 * u(0), 1e-12);
+  EXPECT_TRUE(z.tail<2>() == u.tail<2>());
+  EXPECT_NEAR(H(0, 15), u(0), 1e-12);
+  EXPECT_EQ(H(1, 15), 0.0);
+  EXPECT_EQ(H(2, 15), 0.0);
+}
 
 TEST(GinsJacobians, HeadingNearNorthAndAcrossPi) {
   models::NavState x = test::sample_nav_state();

@@ -2,7 +2,9 @@
 // F (irregular time steps) and measurement gaps it equals the batch least-squares solution of
 // the whole run, means and covariances; the smoothed covariance is never above the filtered one.
 // For a model that declares its transition's block pattern (the 20-state INS), the transition
-// a record keeps, composed block-sparse, equals the dense product of the steps' F.
+// a record keeps, composed block-sparse, equals the dense product of the steps' F. A state held
+// by construction (zero variance, zero noise) is passed through and the rest smoothed as
+// without it.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -90,7 +92,9 @@ ForwardRun forward(int epochs) {
     // Measurements with gaps: none in epochs 10-24, otherwise two of three epochs.
     const bool measure = (k < 10 || k >= 25) && k % 3 != 0;
     const double z = 1.0 + 0.5 * t + 0.3 * std::sin(t) + 0.5 * rng.normal();
-    if (measure) EXPECT_TRUE(eskf::update(m, h, b, Vector<1>(z)).accepted());
+    if (measure) {
+      EXPECT_TRUE(eskf::update(m, h, b, Vector<1>(z)).accepted());
+    }
     EXPECT_TRUE(r.rec.record(t, prior, b).accepted());
     r.filtered.push_back(b);
     r.dt.push_back(dt);
@@ -159,9 +163,119 @@ TEST(Rts, SmoothedCovarianceIsNeverAboveTheFiltered) {
   std::cout << "RTS records: " << r.rec.records().size() << " epochs, " << r.rec.memory_bytes() << " bytes\n";
 }
 
+/// ConstantVelocity with a third state held by construction: zero prior variance, zero process
+/// noise, not in the measurement (an augmented block that is not estimated).
+struct ConstantVelocityWithHeldState {
+  using State = Vector<3>;
+  using Input = NoInput;
+  static constexpr int dim = 3;
+  ConstantVelocity cv;
+  State predict(const State& x, const Input& u, double dt, SquareMatrix<3>* F) const {
+    SquareMatrix<2> F2;
+    State out;
+    out << cv.predict(x.head<2>(), u, dt, F ? &F2 : nullptr), x(2);
+    if (F) {
+      F->setIdentity();
+      F->topLeftCorner<2, 2>() = F2;
+    }
+    return out;
+  }
+  SquareMatrix<3> noise(const State& x, const Input& u, double dt) const {
+    SquareMatrix<3> Q = SquareMatrix<3>::Zero();
+    Q.topLeftCorner<2, 2>() = cv.noise(x.head<2>(), u, dt);
+    return Q;
+  }
+  State inject(const State& x, const Vector<3>& dx) const { return x + dx; }
+  Vector<3> difference(const State& a, const State& b) const { return a - b; }
+};
+
+struct PositionOfThree {
+  static constexpr int dim = 1;
+  Vector<1> predict(const Vector<3>& x, Matrix<1, 3>* H) const {
+    if (H) *H << 1.0, 0.0, 0.0;
+    return Vector<1>(x(0));
+  }
+  SquareMatrix<1> noise(const Vector<3>&) const { return SquareMatrix<1>(0.25); }
+};
+
+// The held state makes every prior covariance singular; the smoother leaves it as it is and
+// smooths the others exactly as the model without it does.
+TEST(Rts, AStateHeldByConstructionIsLeftAsItIsAndTheRestSmoothedAsWithoutIt) {
+  const ConstantVelocity m2;
+  const ConstantVelocityWithHeldState m3;
+  eskf::Belief<ConstantVelocity> b2;
+  eskf::Belief<ConstantVelocityWithHeldState> b3;
+  b2.nominal << 1.0, 0.5;
+  b2.cov << 4.0, 0.5, 0.5, 1.0;
+  b3.nominal << 1.0, 0.5, 0.7;
+  b3.cov.setZero();
+  b3.cov.topLeftCorner<2, 2>() = b2.cov;
+  RtsRecorder<ConstantVelocity> r2;
+  RtsRecorder<ConstantVelocityWithHeldState> r3;
+  r2.start(0.0, b2);
+  r3.start(0.0, b3);
+  sim::Rng rng(9);
+  double t = 0.0;
+  Vector<3> filtered10 = Vector<3>::Zero();
+  for (int k = 1; k < 40; ++k) {
+    const double dt = 0.05 + 0.4 * rng.uniform();
+    t += dt;
+    SquareMatrix<2> F2;
+    SquareMatrix<3> F3;
+    ASSERT_TRUE(eskf::predict(m2, b2, {}, dt, {}, &F2).accepted());
+    ASSERT_TRUE(eskf::predict(m3, b3, {}, dt, {}, &F3).accepted());
+    r2.predicted(F2);
+    r3.predicted(F3);
+    const auto p2 = b2;
+    const auto p3 = b3;
+    if (k % 4 != 0) {
+      const Vector<1> z(1.0 + 0.5 * t + 0.5 * rng.normal());
+      ASSERT_TRUE(eskf::update(m2, Position{}, b2, z).accepted());
+      ASSERT_TRUE(eskf::update(m3, PositionOfThree{}, b3, z).accepted());
+    }
+    ASSERT_TRUE(r2.record(t, p2, b2).accepted());
+    ASSERT_TRUE(r3.record(t, p3, b3).accepted());
+    if (k == 10) filtered10 = b3.nominal;
+  }
+  ASSERT_EQ(b3.cov(2, 2), 0.0);  // the forward pass kept it held
+  ASSERT_TRUE(r2.smooth(m2).accepted());
+  ASSERT_TRUE(r3.smooth(m3).accepted());
+  double worst = 0.0;
+  for (std::size_t k = 0; k < r2.records().size(); ++k) {
+    const auto& s2 = r2.records()[k].posterior;
+    const auto& s3 = r3.records()[k].posterior;
+    worst = std::max(worst, (s3.nominal.head<2>() - s2.nominal).cwiseAbs().maxCoeff());
+    worst = std::max(worst, (s3.cov.topLeftCorner<2, 2>() - s2.cov).cwiseAbs().maxCoeff());
+    EXPECT_EQ(s3.nominal(2), 0.7);
+    EXPECT_TRUE(s3.cov.row(2).isZero(0.0));
+  }
+  EXPECT_LT(worst, 1e-12);
+  // Smoothing did act on the others.
+  EXPECT_GT((r3.records()[10].posterior.nominal - filtered10).norm(), 1e-3);
+}
+
+// A zero variance whose row is not zero is not a held state: the covariance is not positive
+// semi-definite and the pass refuses it, leaving the records as filtered.
+TEST(Rts, AZeroVarianceWithCrossCovarianceIsRefused) {
+  const ConstantVelocityWithHeldState m3;
+  eskf::Belief<ConstantVelocityWithHeldState> b;
+  b.nominal.setZero();
+  b.cov.setIdentity();
+  RtsRecorder<ConstantVelocityWithHeldState> rec;
+  rec.start(0.0, b);
+  auto bad = b;
+  bad.cov(2, 2) = 0.0;
+  bad.cov(0, 2) = bad.cov(2, 0) = 0.1;
+  ASSERT_TRUE(rec.record(1.0, bad, b).accepted());
+  EXPECT_EQ(rec.smooth(m3).problem, Problem::covariance_not_positive_definite);
+  EXPECT_EQ(rec.records()[0].posterior.cov, b.cov);
+}
+
 TEST(Rts, RefusesAnEpochThatDoesNotAdvanceAndKeepsTheRecords) {
   RtsRecorder<ConstantVelocity> rec;
   eskf::Belief<ConstantVelocity> b;
+  b.nominal.setZero();
+  b.cov.setIdentity();
   EXPECT_EQ(rec.record(1.0, b, b).problem, Problem::time_not_set);
   rec.start(1.0, b);
   EXPECT_EQ(rec.record(1.0, b, b).problem, Problem::out_of_order_time);

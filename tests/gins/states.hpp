@@ -8,6 +8,7 @@ namespace ctxfuse::test {
 
 using Nav15 = models::InsNavModel<models::SimplifiedStrapdown>;
 using Nav20 = models::Augmented<Nav15, Block<"mount", 2>, Block<"lever", 3>>;
+using Nav16 = models::Augmented<Nav15, Block<"speed_scale", 1>>;  // with an odometer's scale error
 
 inline constexpr double kDeg = 3.14159265358979323846 / 180.0;
 
@@ -27,6 +28,13 @@ inline Nav20::State sample_nav20_state() {
   Nav20::set_base_part(x, sample_nav_state());
   x.get<"mount">() = Eigen::Vector2d(-0.05, 0.09);
   x.get<"lever">() = Eigen::Vector3d(-1.2, 0.3, 0.6);
+  return x;
+}
+
+inline Nav16::State sample_nav16_state() {
+  Nav16::State x;
+  Nav16::set_base_part(x, sample_nav_state());
+  x.get<"speed_scale">() = Vector<1>(0.013);
   return x;
 }
 

@@ -10,7 +10,7 @@
 namespace ctxfuse::cli {
 
 /// eval::gins_sim_study on `drive` (defined in gins_study.cpp).
-eval::GinsSimStudy gins_study_of(const sim::Drive& drive);
+eval::GinsSimStudy gins_study_of(const sim::Drive& drive, const eval::GinsSimSettings& settings = {});
 
 inline Json gins_errors_json(const eval::HorizontalErrors& e) {
   Json j;
@@ -23,8 +23,11 @@ inline Json gins_errors_json(const eval::HorizontalErrors& e) {
 }
 
 /// One scheme with one noise policy into `j`: the whole drive, the part with GNSS, the garage,
-/// the fixes used and gated.
+/// the fixes used and gated, the forward filter's odometer scale error at the end.
 inline void add_gins_run_json(const eval::GinsSimRun& r, Json& j) {
+  if (r.scheme.smooth) j["smoothed"] = r.smoothed;
+  j["speed_scale"] = r.speed_scale;
+  j["speed_scale_sigma"] = r.speed_scale_sigma;
   j["all"] = gins_errors_json(r.all);
   j["with_gnss"] = gins_errors_json(r.with_gnss);
   j["indoor"] = gins_errors_json(r.indoor);

@@ -7,8 +7,11 @@
 // The filter is assembled from the geodetic models directly: InsNavModel<SimplifiedStrapdown>
 // (the smartphone paper's mechanisation, 15 states: the simulated IMU is aligned with the
 // vehicle at its reference point, so the paper's mounting and lever-arm blocks have nothing to
-// estimate), GNSS position at 1 Hz with a one-tailed chi-square gate, ZUPT + NHC with the
-// odometer's forward speed (and optionally ZIHR) at 10 Hz, RTS over 10 Hz records.
+// estimate) augmented with the odometer's scale error (block "speed_scale", a constant with the
+// odometer's data-sheet sigma; without it the wheel-radius error is an along-track drift in the
+// garage that the covariance does not know), GNSS position at 1 Hz with a one-tailed
+// chi-square gate, ZUPT + NHC with the odometer's forward speed (and optionally ZIHR) at 10 Hz,
+// RTS over 10 Hz records.
 //
 // Static or moving: the raw-IMU detector (models::StaticDetector, the paper's cue) and the
 // odometer together (OdometerStaticDecision). The simulator has no engine or road vibration,
@@ -37,6 +40,7 @@
 #include "ctxfuse/eval/gins_sim_scene.hpp"
 #include "ctxfuse/filters/eskf.hpp"
 #include "ctxfuse/filters/rts.hpp"
+#include "ctxfuse/models/ins_augment.hpp"
 #include "ctxfuse/models/ins_motion.hpp"
 #include "ctxfuse/models/ins_updates.hpp"
 #include "ctxfuse/policies/gating.hpp"
@@ -57,6 +61,10 @@ struct GinsSimSettings {
   double nhc_sigma = 0.1;               // [m/s] lateral / vertical
   double zihr_sigma = 0.1 * 3.14159265358979323846 / 180.0;
   double constraint_interval_s = 0.1;   // also the RTS record interval
+  /// Prior sigma of the odometer's scale error; none: the odometer's data sheet
+  /// (sim::SpeedConfig::scale_sigma); 0: not estimated (the block stays at zero, which is the
+  /// 15-state filter).
+  std::optional<double> speed_scale_sigma;
 };
 
 /// Static when the raw-IMU detector says so and the odometer's latest speed is within three
@@ -109,6 +117,8 @@ struct GinsSimRun {
   HorizontalErrors all, with_gnss, indoor;  // indoor: the garage, where no fix exists
   int fixes_used = 0, fixes_gated = 0;
   std::size_t rts_bytes = 0;
+  bool smoothed = false;  // the RTS pass ran to the first epoch (schemes with smooth)
+  double speed_scale = 0.0, speed_scale_sigma = 0.0;  // the forward filter's at the end of the drive
 };
 
 /// The simulated drive in the filter's frames.
@@ -122,6 +132,8 @@ struct GinsSimDrive {
   std::vector<std::size_t> fix_epoch;                  // index into the GNSS epochs
   std::vector<double> speed_t, speed;                  // odometer
   double speed_noise = 0.05;                           // [m/s] SpeedConfig::noise_mps
+  double speed_scale_sigma = 0.01;                     // SpeedConfig::scale_sigma (data sheet)
+  double speed_scale_truth = 0.0;                      // the drive's drawn scale error (evaluation only)
   double false_static_share = 0.0;                     // IMU detector static while the truth moves
   double false_static_share_odometer = 0.0;            // OdometerStaticDecision static while moving
 };
@@ -144,6 +156,8 @@ inline GinsSimDrive gins_sim_drive(const sim::Drive& d) {
   };
   const double dg = sim::kGravity - earth::normal_gravity(lat0, 0.0);
   out.speed_noise = d.config.speed.noise_mps;
+  out.speed_scale_sigma = d.config.speed.scale_sigma;
+  out.speed_scale_truth = d.speed_scale_error;
   for (const auto& s : d.speed) {
     out.speed_t.push_back(s.t);
     out.speed.push_back(s.speed_mps);
@@ -182,15 +196,16 @@ inline GinsSimDrive gins_sim_drive(const sim::Drive& d) {
   return out;
 }
 
-using GinsSimModel = models::InsNavModel<models::SimplifiedStrapdown>;
+using GinsSimBaseModel = models::InsNavModel<models::SimplifiedStrapdown>;
+using GinsSimModel = models::Augmented<GinsSimBaseModel, Block<"speed_scale", 1>>;  // a constant
 
 inline GinsSimModel gins_sim_model(const sim::ImuConfig& c) {
   GinsSimModel m;
-  m.gyro_noise_density = c.gyro_noise_density;
-  m.accel_noise_density = c.accel_noise_density;
+  m.base.gyro_noise_density = c.gyro_noise_density;
+  m.base.accel_noise_density = c.accel_noise_density;
   // Stationary std sigma of dx = -x/tau dt + q dw: q = sigma sqrt(2 / tau).
-  m.gyro_bias = models::GaussMarkov{c.gyro_bias_sigma * std::sqrt(2.0 / c.gyro_bias_tau_s), c.gyro_bias_tau_s};
-  m.accel_bias = models::GaussMarkov{c.accel_bias_sigma * std::sqrt(2.0 / c.accel_bias_tau_s), c.accel_bias_tau_s};
+  m.base.gyro_bias = models::GaussMarkov{c.gyro_bias_sigma * std::sqrt(2.0 / c.gyro_bias_tau_s), c.gyro_bias_tau_s};
+  m.base.accel_bias = models::GaussMarkov{c.accel_bias_sigma * std::sqrt(2.0 / c.accel_bias_tau_s), c.accel_bias_tau_s};
   return m;
 }
 
@@ -199,16 +214,17 @@ template <class NoisePolicy>
 GinsSimRun run_gins_sim(const GinsSimDrive& d, const sim::ImuConfig& imu, const GinsSimScheme& scheme,
                         NoisePolicy noise, const std::vector<policies::SceneProbabilities>& probabilities,
                         const GinsSimSettings& s = {}) {
-  using S = models::NavState;
+  using S = GinsSimModel::State;
   const GinsSimModel model = gins_sim_model(imu);
   GinsSimRun run;
   run.scheme = scheme;
   eskf::Belief<GinsSimModel> b;
-  b.nominal = d.truth.front();
-  Vector<15> sd;
+  GinsSimModel::set_base_part(b.nominal, d.truth.front());
+  b.nominal.get<"speed_scale">().setZero();
+  Vector<GinsSimModel::dim> sd;
   const double deg = 3.14159265358979323846 / 180.0;
   sd << 2, 2, 3, 0.1, 0.1, 0.1, 0.5 * deg, 0.5 * deg, 2 * deg, Eigen::Vector3d::Constant(imu.gyro_bias_sigma),
-      Eigen::Vector3d::Constant(imu.accel_bias_sigma);
+      Eigen::Vector3d::Constant(imu.accel_bias_sigma), s.speed_scale_sigma.value_or(d.speed_scale_sigma);
   b.cov = sd.cwiseAbs2().asDiagonal();
   const ChiSquareGate gate(s.gate_probability);
   OdometerStaticDecision motion(d.speed_noise);
@@ -237,7 +253,7 @@ GinsSimRun run_gins_sim(const GinsSimDrive& d, const sim::ImuConfig& imu, const 
     models::BodyIncrements inc;
     inc.dtheta = 0.5 * (d.gyro[k - 1] + d.gyro[k]) * dt;
     inc.dv = 0.5 * (d.accel[k - 1] + d.accel[k]) * dt;
-    SquareMatrix<15> F;
+    SquareMatrix<GinsSimModel::dim> F;
     if (eskf::predict(model, b, inc, dt, {}, &F).accepted() && scheme.smooth) rec.predicted(F);
     const std::optional<double> speed = odometer_speed_at(d, d.t[k], spd);
     const bool is_static = motion.push(d.gyro[k], d.accel[k], speed);
@@ -269,8 +285,10 @@ GinsSimRun run_gins_sim(const GinsSimDrive& d, const sim::ImuConfig& imu, const 
       eval_filtered.push_back(b.nominal.get<"p">());
     }
   }
+  run.speed_scale = b.nominal.get<"speed_scale">()(0);
+  run.speed_scale_sigma = std::sqrt(b.cov(GinsSimModel::dim - 1, GinsSimModel::dim - 1));
   if (scheme.smooth) {
-    (void)rec.smooth(model);
+    run.smoothed = rec.smooth(model).accepted();
     run.rts_bytes = rec.memory_bytes();
   }
   std::vector<double> all, with_gnss, indoor;
@@ -288,6 +306,7 @@ GinsSimRun run_gins_sim(const GinsSimDrive& d, const sim::ImuConfig& imu, const 
 
 struct GinsSimStudy {
   std::uint64_t seed = 1;
+  double speed_scale_truth = 0.0;    // the odometer's drawn scale error
   double scene_accuracy = 0.0;       // classifier argmax against the true scene, all epochs
   double false_static_share = 0.0;           // the raw-IMU detector alone
   double false_static_share_odometer = 0.0;  // the static decision the schemes use
@@ -307,6 +326,7 @@ inline GinsSimStudy gins_sim_study(const sim::Drive& drive, const GinsSimSetting
   GinsSimStudy out;
   out.seed = cfg.seed;
   out.imu_samples = d.t.size();
+  out.speed_scale_truth = d.speed_scale_truth;
   out.fixes = d.fix_t.size();
   out.false_static_share = d.false_static_share;
   out.false_static_share_odometer = d.false_static_share_odometer;

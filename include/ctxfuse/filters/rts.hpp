@@ -24,6 +24,13 @@
 // recursion uses Ps_{k+1} about the posterior nominal beside Pbar about the prior one (equal to
 // first order in the update's correction; exact for vector states). Epochs without updates
 // (gaps) have prior == posterior and need nothing special.
+//
+// A state held by construction (an augmented block with zero prior variance and zero process
+// noise: a lever arm given as known, a scale factor not estimated) has exact zero rows and
+// columns in every covariance, so Pbar is singular. Such a state is decoupled from the others
+// (Pbar_jj = 0 forces (Phi P)_j = 0 for a positive semi-definite P), and the RTS solution of
+// the others is the one without it; the solve puts 1 on its diagonal, which gives it a zero
+// gain and leaves every other gain as in the reduced problem.
 #pragma once
 
 #include <Eigen/Cholesky>
@@ -85,8 +92,9 @@ class RtsRecorder {
   }
 
   /// The backward pass; afterwards records()[k].posterior is the smoothed belief at epoch k.
-  /// On a failure (a prior covariance that is not positive definite) the records from the
-  /// failed epoch down keep their filtered values and the status names the problem.
+  /// On a failure (a prior covariance that is not positive definite apart from held states)
+  /// the records from the failed epoch down keep their filtered values and the status names
+  /// the problem.
   Status smooth(const Model& model) {
     if (records_.size() < 2 || smoothed_) return Status{};
     // The smoothed covariance of epoch k+1 before its reset, in the prior's tangent space.
@@ -95,7 +103,16 @@ class RtsRecorder {
     for (std::size_t k = records_.size() - 1; k-- > 0;) {
       Record& r = records_[k];
       const Record& n = records_[k + 1];
-      const Eigen::LLT<SquareMatrix<N>> llt(n.prior.cov);
+      const SquareMatrix<N>* pbar = &n.prior.cov;
+      SquareMatrix<N> without_held;
+      for (int j = 0; j < N; ++j) {
+        if (n.prior.cov(j, j) != 0.0) continue;
+        if (pbar == &n.prior.cov) without_held = n.prior.cov;
+        pbar = &without_held;
+        if (!n.prior.cov.row(j).isZero(0.0)) return Status::failure(Problem::covariance_not_positive_definite);
+        without_held(j, j) = 1.0;
+      }
+      const Eigen::LLT<SquareMatrix<N>> llt(*pbar);
       if (llt.info() != Eigen::Success) return Status::failure(Problem::covariance_not_positive_definite);
       // C' = Pbar^-1 Phi P
       const SquareMatrix<N> C = llt.solve(n.transition * r.posterior.cov).transpose();
