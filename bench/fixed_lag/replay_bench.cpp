@@ -15,6 +15,7 @@
 #include <memory>
 #include <string>
 
+#include "ctxfuse/pipelines/nlos_uwb/imu_ekf.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/imu_smoother.hpp"
 #include "uwb_replay.hpp"
 
@@ -56,13 +57,15 @@ void FixedLag_Replay10min(benchmark::State& state) {
 }
 
 // The same replay through the smoother with IMU factors (imu_smoother.hpp: the 8-state planar
-// IMU state, one IMU factor of ~10 samples per interval), started by alignment outside the
-// timing; the IMU pieces are handed over inside it, as the run loop does.
+// IMU state, one IMU factor of ~10 samples per interval), and through the EKF of the same
+// fusion (imu_ekf.hpp: one interval prediction and one scalar update per attached range),
+// each started by alignment outside the timing; the IMU pieces are handed over inside it, as
+// the run loop does.
+template <class Smoother>
 void FixedLag_ImuReplay10min(benchmark::State& state) {
   const test::UwbReplay replay(10);
   constexpr int kMinutes = 10;
   std::array<double, kMinutes> minute_s{};
-  using Smoother = nu::ImuRangeSmoother<>;
   auto s = std::make_unique<Smoother>(nu::Settings{}, nu::ImuFusionSettings{});
   int refused = 0;
   std::size_t first = 0;
@@ -93,6 +96,7 @@ void FixedLag_ImuReplay10min(benchmark::State& state) {
 }
 
 BENCHMARK(FixedLag_Replay10min)->Name("FixedLag/Replay10min")->Unit(benchmark::kMillisecond);
-BENCHMARK(FixedLag_ImuReplay10min)->Name("FixedLag/ImuReplay10min")->Unit(benchmark::kMillisecond);
+BENCHMARK(FixedLag_ImuReplay10min<nu::ImuRangeSmoother<>>)->Name("FixedLag/ImuReplay10min")->Unit(benchmark::kMillisecond);
+BENCHMARK(FixedLag_ImuReplay10min<nu::ImuRangeEkf<>>)->Name("FixedLag/ImuEkfReplay10min")->Unit(benchmark::kMillisecond);
 
 }  // namespace

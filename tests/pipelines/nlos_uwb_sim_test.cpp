@@ -97,6 +97,21 @@ TEST(NlosUwbSim, ImuFactorsBeatTheMotionModelAndThePaperRuleGainsWithThem) {
   EXPECT_GT(r.variant("graph_imu_paper_rule").epochs_left_out, 100u);
 }
 
+// The EKF of the same IMU fusion and rule (imu_ekf.hpp) against the graph: the graph reports its
+// newest state, so it gains only from relinearising the window; on seeds 1-5 of the full drive
+// the two RMSE differ by <= 0.02 m (docs/results.md). Here within 3 % (measured 1.2 %), both below
+// the constant-velocity EKF of the same rule.
+TEST(NlosUwbSim, TheImuEkfMatchesTheImuGraphOfTheSameRule) {
+  const auto& r = report();
+  const auto& ekf = r.variant("ekf_imu_paper_rule").errors;
+  const auto& graph = r.variant("graph_imu_paper_rule").errors;
+  std::printf("ekf_imu_paper_rule RMSE %.3f m, graph_imu_paper_rule %.3f m\n", ekf.horizontal.rmse, graph.horizontal.rmse);
+  EXPECT_GT(ekf.count, 1000u);
+  EXPECT_LT(std::abs(ekf.horizontal.rmse - graph.horizontal.rmse), 0.03 * graph.horizontal.rmse);
+  EXPECT_LT(ekf.horizontal.rmse, r.variant("ekf_gate_paper_rule").errors.horizontal.rmse);
+  EXPECT_GT(r.variant("ekf_imu_paper_rule").epochs_left_out, 100u);
+}
+
 // Why recall stays low: v_u and d_rho are differences of consecutive ranges, so a bias that
 // persists through an episode shows only at its ends. With one-epoch episodes (each NLOS range
 // its own draw, as an error added per range would be) the same classifiers find most of them.

@@ -13,8 +13,9 @@
 // dropouts and ranging sigma (0.1 m, the paper's) are its defaults.
 //
 // Estimators: the graph_imu* variants are the paper's graph, IMU factors between the states
-// (pipelines/nlos_uwb/imu_smoother.hpp, noise from the simulated IMU's data sheet); the other
-// graph variants and the EKF use the pipeline's constant-velocity motion model; "IMU only"
+// (pipelines/nlos_uwb/imu_smoother.hpp, noise from the simulated IMU's data sheet), and the
+// ekf_imu* variants the EKF of the same fusion (pipelines/nlos_uwb/imu_ekf.hpp); the other
+// graph variants and the ekf_gate* ones use the pipeline's constant-velocity motion model; "IMU only"
 // is the strapdown mechanisation (models/ins.hpp) of the simulated IMU from the true state at
 // the first LS fix, never corrected. The SVM is trained on other seeds' drives (training_seeds),
 // with the simulator's labels and the pipeline's own features (the EKF without NLOS handling
@@ -40,6 +41,7 @@
 #include "ctxfuse/eval/position_error.hpp"
 #include "ctxfuse/eval/trajectory.hpp"
 #include "ctxfuse/models/ins.hpp"
+#include "ctxfuse/pipelines/nlos_uwb/imu_ekf.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/imu_smoother.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/run.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/smoother.hpp"
@@ -119,7 +121,7 @@ struct NlosSimReport {
   }
 };
 
-inline constexpr std::array<std::string_view, 12> kNlosSimVariants{
+inline constexpr std::array<std::string_view, 14> kNlosSimVariants{
     "imu_only",                  // strapdown from the true state at the span start
     "least_squares",             // snapshot LS per epoch
     "graph",                     // fixed-lag graph, every range (no NLOS handling, no gate)
@@ -131,7 +133,9 @@ inline constexpr std::array<std::string_view, 12> kNlosSimVariants{
     "ekf_gate",
     "graph_imu",                 // IMU factors between the states: every range, no gate
     "graph_imu_paper_rule",      // IMU factors, the paper's rule, no gate (the paper's proposed)
-    "graph_imu_gate_paper_rule"};  // IMU factors, the gate and the paper's rule
+    "graph_imu_gate_paper_rule",   // IMU factors, the gate and the paper's rule
+    "ekf_imu_paper_rule",          // the EKF with the IMU, the paper's rule, no gate
+    "ekf_imu_gate_paper_rule"};    // the EKF with the IMU, the gate and the paper's rule
 
 /// The SVM's training rows of one simulated drive: the pipeline's features with truth labels.
 inline void append_sim_svm_rows(const sim::Drive& d, const pipelines::nlos_uwb::Settings& s, pipelines::nlos_uwb::LabelledSvmRows& rows) {
@@ -284,6 +288,9 @@ inline NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::ui
   add_run(kNlosSimVariants[10], nu::run(std::span<const io::ImuSample>(imu), rs, ImuGraph(s, sheet), nu::PaperEpochRule{}, classifier, s));
   add_run(kNlosSimVariants[11], nu::run(std::span<const io::ImuSample>(imu), rs, nu::ImuRangeSmoother<>(s, sheet), nu::PaperEpochRule{},
                                         classifier, s));
+  add_run(kNlosSimVariants[12],
+          nu::run(std::span<const io::ImuSample>(imu), rs, nu::ImuRangeEkf<NoGate>(s, sheet), nu::PaperEpochRule{}, classifier, s));
+  add_run(kNlosSimVariants[13], nu::run(std::span<const io::ImuSample>(imu), rs, nu::ImuRangeEkf<>(s, sheet), nu::PaperEpochRule{}, classifier, s));
   score_identification(rep.proposed, lr, rep.svm_vu_model, rep);
   return rep;
 }

@@ -65,6 +65,33 @@ struct RangeAtHeight {
   Problem check(const Vector<1>& z) const { return z(0) < 0.0 ? Problem::measurement_out_of_domain : Problem::none; }
 };
 
+/// The clock's checks of predict_to(t): started, t finite and not before the clock.
+inline Status clock_check(bool started, double now, double t) {
+  if (!started) return Status::invalid(Problem::time_not_set);
+  if (!std::isfinite(t)) return Status::invalid(Problem::non_finite_dt);
+  return t < now ? Status::invalid(Problem::out_of_order_time) : Status{};
+}
+
+/// A range every estimator refuses before use: non-finite, not positive, beyond max_range_m.
+inline Problem range_problem(const io::UwbRange& r, const Settings& s) {
+  if (!r.anchor_position.allFinite() || !std::isfinite(r.range_m)) return Problem::non_finite_measurement;
+  if (!(r.range_m > 0.0 && r.range_m <= s.max_range_m)) return Problem::measurement_out_of_domain;
+  return Problem::none;
+}
+
+/// An EKF's epoch: each attached range at its own time, in order (predict_to, then update;
+/// statuses[i] its outcome), then the clock to the epoch's last range. A refused prediction
+/// ends the epoch with its status.
+template <class Ekf>
+Status apply_ranges_in_order(Ekf& ekf, std::span<const io::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
+  for (std::size_t i = 0; i < epoch.size(); ++i) {
+    if (!attach[i]) continue;
+    if (const Status p = ekf.predict_to(epoch[i].t); !p.accepted()) return p;
+    statuses[i] = ekf.update(epoch[i]);
+  }
+  return ekf.predict_to(epoch.back().t);
+}
+
 /// False for an estimator that declares `uses_ranges = false` (the motion-model baseline).
 template <class E>
 inline constexpr bool kUsesRanges = [] {
@@ -120,10 +147,7 @@ class PlanarCvBelief {
 
   /// Predicts to t; t equal to the clock is a no-op, t before it is refused (state unchanged).
   Status predict_to(double t) {
-    if (!started_) return Status::invalid(Problem::time_not_set);
-    if (!std::isfinite(t)) return Status::invalid(Problem::non_finite_dt);
-    if (t < t_) return Status::invalid(Problem::out_of_order_time);
-    if (t == t_) return Status{};
+    if (const Status c = clock_check(started_, t_, t); !c.accepted() || t == t_) return c;
     const Status s = ekf::predict(motion_, belief_, NoInput{}, t - t_);
     if (s.accepted()) t_ = t;
     return s;
@@ -150,20 +174,13 @@ class RangeEkf : public detail::PlanarCvBelief {
 
   Status update(const io::UwbRange& r) {
     if (!started_) return Status::invalid(Problem::time_not_set);
-    if (!r.anchor_position.allFinite() || !std::isfinite(r.range_m)) return Status::invalid(Problem::non_finite_measurement);
-    if (!(r.range_m > 0.0 && r.range_m <= settings_.max_range_m)) return Status::invalid(Problem::measurement_out_of_domain);
+    if (const Problem p = range_problem(r, settings_); p != Problem::none) return Status::invalid(p);
     const RangeAtHeight h{r.anchor_position, settings_.tag_height_m, settings_.range_sigma_m};
     return ekf::update<4>(h, belief_, Vector<1>(r.range_m), gate_);
   }
 
-  /// Each attached range at its own time, in order; then the clock to the epoch's last range.
   Status apply_epoch(std::span<const io::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
-    for (std::size_t i = 0; i < epoch.size(); ++i) {
-      if (!attach[i]) continue;
-      if (const Status p = predict_to(epoch[i].t); !p.accepted()) return p;
-      statuses[i] = update(epoch[i]);
-    }
-    return predict_to(epoch.back().t);
+    return apply_ranges_in_order(*this, epoch, attach, statuses);
   }
 
  private:

@@ -32,8 +32,7 @@ namespace ctxfuse::pipelines::nlos_uwb {
 template <class Model, int N>
 Status gate_range(const Settings& s, double threshold, const Model& h, const io::UwbRange& r, const Vector<N>& x,
                   const SquareMatrix<N>& P) {
-  if (!r.anchor_position.allFinite() || !std::isfinite(r.range_m)) return Status::invalid(Problem::non_finite_measurement);
-  if (!(r.range_m > 0.0 && r.range_m <= s.max_range_m)) return Status::invalid(Problem::measurement_out_of_domain);
+  if (const Problem p = range_problem(r, s); p != Problem::none) return Status::invalid(p);
   Matrix<1, N> H;
   const double y = r.range_m - h.predict(x, &H)(0);
   const double S = (H * P * H.transpose())(0, 0) + h.sigma * h.sigma;
@@ -47,11 +46,7 @@ Status gate_range(const Settings& s, double threshold, const Model& h, const io:
 }
 
 /// The smoothers add states only with an epoch: predict_to only checks the clock.
-inline Status smoother_clock_check(bool started, double now, double t) {
-  if (!started) return Status::invalid(Problem::time_not_set);
-  if (!std::isfinite(t)) return Status::invalid(Problem::non_finite_dt);
-  return t < now ? Status::invalid(Problem::out_of_order_time) : Status{};
-}
+inline Status smoother_clock_check(bool started, double now, double t) { return clock_check(started, now, t); }
 
 /// What every smoother checks before an epoch: a status to return at once, or none to go on
 /// with a step of dt > 0 to the epoch's last range. An epoch whose ranges all share the start's
