@@ -161,6 +161,7 @@ int run_uwb(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::os
   doc["trajectory_variant"] = chosen;
   doc["estimates"] = static_cast<double>(track.estimates.size());
   doc["svm"] = rep.svm;
+  if (rep.svm) doc["svm_gamma"] = rep.svm_gamma;
   Json cases = Json::array();
   for (const auto& c : rep.training_cases) cases.push_back(c.string());
   doc["training_cases"] = std::move(cases);

@@ -153,6 +153,7 @@ struct NlosUwbVariant {
 struct NlosUwbCaseReport {
   std::vector<std::filesystem::path> training_cases;  // the SVM's (never the scored case)
   bool svm = false;
+  double svm_gamma = std::nan("");  // the trained SVM's RBF gamma (standardised features)
   std::vector<NlosUwbVariant> variants;               // see evaluate_nlos_uwb_case
   IdentificationReport identification;                // of the paper's pipeline (first variant)
   std::map<std::string, double> authors;              // RMSD_results.txt, when the case has it
@@ -196,6 +197,7 @@ inline NlosUwbCaseReport evaluate_nlos_uwb_case(const std::filesystem::path& cas
   std::optional<nu::NlosSvm> svm;
   if (!training_cases.empty()) svm = train_svm_on_cases(training_cases, s);
   rep.svm = svm.has_value();
+  if (svm) rep.svm_gamma = svm->gamma;
   const std::span<const io::UwbRange> rs(ranges);
   const nu::NlosClassifier classifier(s, svm);
   auto add = [&](std::string_view name, nu::Track t) {

@@ -22,7 +22,9 @@
 #include "ctxfuse/classify/consistency.hpp"
 #include "ctxfuse/classify/dempster_shafer.hpp"
 #include "ctxfuse/classify/svm.hpp"
+#include "ctxfuse/classify/svm_folds.hpp"
 #include "ctxfuse/classify/svm_train.hpp"
+#include "ctxfuse/classify/svm_tune.hpp"
 #include "ctxfuse/features/nlos.hpp"
 #include "ctxfuse/io/messages.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/policies.hpp"
@@ -108,10 +110,35 @@ struct LabelledSvmRows {
   std::vector<int> labels;  // kNlosLabel / kLosLabel
 };
 
+/// The RBF gamma of the best cross-validated accuracy over libsvm's grid (log2 gamma = 3, 1,
+/// ..., -15; C and the rest as `base`, no probabilities), folds of contiguous blocks within
+/// each class of x's two class runs (the first `per_class` rows one class, the rest the other,
+/// each in time order); ties go to the smaller gamma.
+template <int Dim>
+double cross_validated_gamma(const classify::SvmFeatures<Dim>& x, const std::vector<int>& y, std::size_t per_class, int folds,
+                             classify::SvmTrainOptions base) {
+  std::vector<int> fold = classify::block_folds(per_class, folds);
+  const std::vector<int> second = classify::block_folds(y.size() - per_class, folds);
+  fold.insert(fold.end(), second.begin(), second.end());
+  base.probability = false;
+  double best_gamma = 0.0, best = -1.0;
+  for (int log2_gamma = 3; log2_gamma >= -15; log2_gamma -= 2) {
+    base.gamma = std::ldexp(1.0, log2_gamma);
+    const double score = classify::cross_validate_svm<Dim, 2>(x, y, base, fold).score;
+    if (score >= best) {
+      best = score;
+      best_gamma = base.gamma;
+    }
+  }
+  return best_gamma;
+}
+
 /// Trains an SVM (RBF, Platt probabilities) on `features(input)` (a Dim-vector) of a balanced
 /// subsample: every NLOS row and as many LOS rows, both thinned evenly to at most
-/// settings.svm_rows_per_class; rows whose SvmInput is not finite are skipped. Throws
-/// std::invalid_argument when a class is missing or the rows are unusable.
+/// settings.svm_rows_per_class; rows whose SvmInput is not finite are skipped. gamma by
+/// cross_validated_gamma when the settings ask for it and each class has a row per fold,
+/// libsvm's default otherwise. Throws std::invalid_argument when a class is missing or the
+/// rows are unusable.
 template <int Dim, class Features>
 classify::SvmModel<Dim, 2> train_balanced_svm(const LabelledSvmRows& rows, const Settings& s, Features features) {
   std::vector<std::size_t> nlos, los;
@@ -134,6 +161,8 @@ classify::SvmModel<Dim, 2> train_balanced_svm(const LabelledSvmRows& rows, const
   take(nlos, kNlosLabel);
   take(los, kLosLabel);
   classify::SvmTrainOptions o;
+  if (s.svm_gamma_by_cross_validation && per_class >= static_cast<std::size_t>(s.svm_cv_folds))
+    o.gamma = cross_validated_gamma<Dim>(x, y, per_class, s.svm_cv_folds, o);
   o.probability = true;
   return classify::train_svm<Dim, 2>(x, y, o);
 }
