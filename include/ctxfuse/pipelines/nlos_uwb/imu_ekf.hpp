@@ -85,11 +85,7 @@ class ImuRangeEkf {
   Status update(const io::UwbRange& r) {
     if (!started_) return Status::invalid(Problem::time_not_set);
     if (const Problem p = range_problem(r, settings_); p != Problem::none) return Status::invalid(p);
-    models::PlanarRange h;
-    h.anchor = r.anchor_position;
-    h.tag_height = settings_.tag_height_m;
-    h.sigma = settings_.range_sigma_m;
-    return ekf::update<L::size>(h, belief_, Vector<1>(r.range_m), gate_);
+    return ekf::update<L::size>(planar_range(r, settings_), belief_, Vector<1>(r.range_m), gate_);
   }
 
   Status apply_epoch(std::span<const io::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {

@@ -84,6 +84,15 @@ struct ImuFusionSettings {
   }
 };
 
+/// The range model of `r` on the planar IMU state (tag height and ranging sigma from settings).
+inline models::PlanarRange planar_range(const io::UwbRange& r, const Settings& s) {
+  models::PlanarRange h;
+  h.anchor = r.anchor_position;
+  h.tag_height = s.tag_height_m;
+  h.sigma = s.range_sigma_m;
+  return h;
+}
+
 /// The IMU pieces not yet consumed by a state, oldest first, in a ring of fixed capacity (the
 /// oldest are dropped when it is full: only pieces after the newest state are ever needed).
 class ImuPieces {
@@ -200,7 +209,8 @@ class ImuRangeSmoother {
     return s;
   }
 
-  Status predict_to(double t) const { return smoother_clock_check(started_, time(), t); }
+  /// The smoother adds states only with an epoch: here only the clock is checked.
+  Status predict_to(double t) const { return clock_check(started_, time(), t); }
 
   Status apply_epoch(std::span<const io::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
     if (auto done = smoother_epoch_check(started_, fresh_, time(), kSlots, epoch, statuses)) return *done;
@@ -211,13 +221,7 @@ class ImuRangeSmoother {
     SquareMatrix<L::size> F;
     const Vector<L::size> x = smoother_.motion().predict(smoother_.newest(), u, dt, &F);
     const SquareMatrix<L::size> P = F * smoother_.newest_covariance() * F.transpose() + smoother_.motion().noise(smoother_.newest(), u, dt);
-    auto range = [&](const io::UwbRange& r) {
-      models::PlanarRange h;
-      h.anchor = r.anchor_position;
-      h.tag_height = settings_.tag_height_m;
-      h.sigma = settings_.range_sigma_m;
-      return h;
-    };
+    auto range = [&](const io::UwbRange& r) { return planar_range(r, settings_); };
     const Status s = gated_smoother_step(smoother_, settings_, gate_.threshold(1), range, u, x, P, epoch, attach, statuses);
     if (s.accepted()) pieces_.drop_before(t);
     return s;

@@ -45,9 +45,6 @@ Status gate_range(const Settings& s, double threshold, const Model& h, const io:
   return st;
 }
 
-/// The smoothers add states only with an epoch: predict_to only checks the clock.
-inline Status smoother_clock_check(bool started, double now, double t) { return clock_check(started, now, t); }
-
 /// What every smoother checks before an epoch: a status to return at once, or none to go on
 /// with a step of dt > 0 to the epoch's last range. An epoch whose ranges all share the start's
 /// time (a simulator, or a system stamping the epoch once) is the epoch the start's fix was
@@ -129,7 +126,7 @@ class RangeSmoother {
   }
 
   /// The smoother adds states only with an epoch: here only the clock is checked.
-  Status predict_to(double t) const { return smoother_clock_check(started_, time(), t); }
+  Status predict_to(double t) const { return clock_check(started_, time(), t); }
 
   Status apply_epoch(std::span<const io::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
     if (auto done = smoother_epoch_check(started_, fresh_, time(), kSlots, epoch, statuses)) return *done;
