@@ -36,17 +36,23 @@ TEST(GinsRealDrive, OutageErrorsWithAndWithoutConstraints) {
   EXPECT_EQ(both.static_start.samples, 3061u);
   EXPECT_NEAR(both.static_start.gyro_std.maxCoeff() / gins::kDeg, 2.324, 0.001);
   EXPECT_NEAR(both.static_start.accel_std.maxCoeff(), 0.130, 0.001);
+  EXPECT_EQ(both.static_start.allan_differences, 33u);
+  EXPECT_NEAR(both.static_start.gyro_allan_1s.maxCoeff() / gins::kDeg, 0.0991, 0.0001);
+  EXPECT_NEAR(both.static_start.accel_allan_1s.maxCoeff(), 0.0147, 0.0001);
+  // No IMU gap on the drive: one alignment, never lost.
+  EXPECT_EQ(both.counts.imu_losses + both.counts.realignments, 0u);
 
   auto near = [](double measured, double expected) { EXPECT_NEAR(measured, expected, 0.02 * expected); };
-  near(s_none.forward.rms, 5.311);
-  near(s_none.forward.max, 21.72);
-  near(s_both.forward.rms, 2.474);
-  near(s_both.forward.max, 11.87);
-  near(s_both.smoothed.rms, 0.281);
-  near(s_both.smoothed.max, 0.820);
-  // Below the public figures of the upstream filter with ZUPT + NHC (3.46 / 14.2 m).
-  EXPECT_LT(s_both.forward.rms, 3.46);
-  EXPECT_LT(s_both.forward.max, 14.2);
+  near(s_none.forward.rms, 4.165);
+  near(s_none.forward.max, 19.43);
+  near(s_both.forward.rms, 1.054);
+  near(s_both.forward.max, 4.107);
+  near(s_both.smoothed.rms, 0.283);
+  near(s_both.smoothed.max, 0.699);
+  // The targets: forward with ZUPT + NHC <= 2 m RMS and <= 8 m max, smoothed <= 0.3 m.
+  EXPECT_LT(s_both.forward.rms, 2.0);
+  EXPECT_LT(s_both.forward.max, 8.0);
+  EXPECT_LT(s_both.smoothed.rms, 0.3);
   std::printf("none %.3f / %.3f m, zupt+nhc %.3f / %.3f m, smoothed %.3f / %.3f m, records %.1f MB\n", s_none.forward.rms,
               s_none.forward.max, s_both.forward.rms, s_both.forward.max, s_both.smoothed.rms, s_both.smoothed.max,
               both.record_bytes / 1e6);

@@ -326,3 +326,43 @@ TEST(Rts, BlockSparseTransitionEqualsTheDenseProduct) {
 
 }  // namespace
 
+
+// A restart (a filter that lost its state and started again, e.g. an INS re-aligned after an
+// IMU gap) splits the run: smoothing the whole equals smoothing the two runs apart, and the
+// epoch before the restart keeps its filtered belief. Recorded as an ordinary epoch instead,
+// the later run's data would reach back across it.
+TEST(Rts, ARestartSmoothsTheRunsBeforeAndAfterItApart) {
+  const ForwardRun r = forward(80);
+  const auto& R = r.rec.records();
+  eskf::Belief<ConstantVelocity> fresh = R[40].posterior;
+  fresh.nominal += Vector<2>(3.0, -1.0);
+  fresh.cov *= 3.0;
+  RtsRecorder<ConstantVelocity> whole, first, second, linked;
+  whole.start(R[0].t, R[0].posterior);
+  first.start(R[0].t, R[0].posterior);
+  linked.start(R[0].t, R[0].posterior);
+  for (std::size_t k = 1; k < R.size(); ++k) {
+    if (k == 40) {
+      ASSERT_TRUE(whole.restart(R[k].t, fresh).accepted());
+      second.start(R[k].t, fresh);
+      linked.predicted(R[k].transition);
+      ASSERT_TRUE(linked.record(R[k].t, fresh, fresh).accepted());
+      continue;
+    }
+    for (RtsRecorder<ConstantVelocity>* rec : {&whole, k < 40 ? &first : &second, &linked}) {
+      rec->predicted(R[k].transition);
+      ASSERT_TRUE(rec->record(R[k].t, R[k].prior, R[k].posterior).accepted());
+    }
+  }
+  EXPECT_FALSE(whole.restart(R.back().t, fresh).accepted());  // time must advance
+  for (auto* rec : {&whole, &first, &second, &linked}) ASSERT_TRUE(rec->smooth(ConstantVelocity{}).accepted());
+  ASSERT_EQ(whole.records().size(), R.size());
+  for (std::size_t k = 0; k < R.size(); ++k) {
+    const auto& w = whole.records()[k].posterior;
+    const auto& apart = k < 40 ? first.records()[k].posterior : second.records()[k - 40].posterior;
+    EXPECT_LT((w.nominal - apart.nominal).norm(), 1e-12) << k;
+    EXPECT_LT((w.cov - apart.cov).norm(), 1e-12) << k;
+  }
+  EXPECT_EQ(whole.records()[39].posterior.cov, R[39].posterior.cov);
+  EXPECT_GT((linked.records()[39].posterior.nominal - whole.records()[39].posterior.nominal).norm(), 1e-3);
+}

@@ -212,10 +212,17 @@ void check_fault(const Fault& f) {
     EXPECT_EQ(out.replay.imu.backwards, in_window(v, f.begin, last - f.clock_jump_s));
     evidence = format("backwards dropped: imu %zu, gnss %zu", out.replay.imu.backwards, out.replay.streams[0].backwards);
   } else if (f.kind == FaultKind::clock_jump) {
-    // 5 s of the last IMU sample held puts the INS 50 m ahead of the next fix.
-    EXPECT_GE(c.gnss_gated - c0.gnss_gated, 1u);
-    evidence = format("%zu fixes gated, %zu released", c.gnss_gated - c0.gnss_gated, c.gnss_released - c0.gnss_released);
+    // 5 s without an IMU sample: the pass is lost (below) and re-aligns on the fixes.
+    evidence = "no IMU for 5 s";
   }
+  // More than Settings::imu_max_unmeasured_s without a measured IMU sample (refused, dropped or
+  // skipped by the clock): the pass is lost once and re-aligns once (ForwardPass::lose).
+  const bool imu_gap = (imu && (f.kind == FaultKind::nan_value || f.kind == FaultKind::inf_value || f.kind == FaultKind::nan_stamp ||
+                                f.kind == FaultKind::dropout)) ||
+                       (f.kind == FaultKind::clock_jump && f.clock_jump_s > 1.0);
+  EXPECT_EQ(c.imu_losses - c0.imu_losses, imu_gap ? 1u : 0u);
+  EXPECT_EQ(c.realignments - c0.realignments, imu_gap ? 1u : 0u);
+  if (imu_gap) evidence += "; lost, re-aligned";
 
   // Recovery.
   const double p95 = clean_p95();
@@ -239,19 +246,18 @@ TEST(FaultInjectionGins, CleanRunIsClean) {
   EXPECT_TRUE(o.checks.clean());
   EXPECT_EQ(o.replay.dropped(), 0u);
   EXPECT_EQ(o.counts.imu_refused + o.counts.gnss_refused + o.counts.filter_failures, 0u);
+  EXPECT_EQ(o.counts.imu_losses + o.counts.realignments, 0u);
   std::printf("clean GNSS/INS: %zu epochs, error p95 %.2f m; faults at %.0f s\n", o.epochs.size(), clean_p95(), kFault);
 }
 
 // After three fixes gated in a row the pass releases the next one with the position's variance
-// widened just enough to pass the gate (Settings::gate_release_count, ForwardPass::release_fix):
-// a fix 100 m off (the jump) or 50 m off (5 s of dead reckoning that did not happen, the clock
-// jump) moves the position, not velocity and attitude, and once the jump is over the next
-// release brings it back. Taken with the gate off, the jump's INS ran away (peak 217 m).
+// widened just enough to pass the gate (Settings::gate_release_count, ForwardPass::release):
+// a fix 100 m off moves the position, not velocity and attitude, and once the jump is over the
+// next release brings it back. Taken with the gate off, the jump's INS ran away (peak 217 m).
 TEST(FaultInjectionGins, JumpsReleased) {
   Fault jump = window("GNSS +100 m 10 s", FaultKind::gnss_jump, StreamId::gnss, kFault, 10.0);
   jump.jump_m = 100.0 / kEarthRadius / test::kDeg;  // the fix's x is its latitude [deg]: 100 m north
   check_fault(jump);
-  check_fault(window("clock +5 s", FaultKind::clock_jump, StreamId::all, kFault + 0.5, 0.0));
 }
 
 TEST(FaultInjectionGins, Gnss) {
@@ -264,7 +270,10 @@ TEST(FaultInjectionGins, Gnss) {
     check_fault(f);
 }
 
-TEST(FaultInjectionGins, ImuAndClockBack) {
+// The IMU faults and the clock jumps. A gap of more than imu_max_unmeasured_s without a
+// measured IMU sample (5 s refused, 10 s dropped, 5 s skipped by the clock) loses the pass,
+// which re-aligns on the fixes once the IMU is back (ForwardPass::lose).
+TEST(FaultInjectionGins, ImuAndClockJumps) {
   Fault back = window("clock -2 s", FaultKind::clock_jump, StreamId::all, kFault + 0.5, 0.0);
   back.clock_jump_s = -2.0;
   for (const Fault& f : {window("IMU NaN 5 s", FaultKind::nan_value, StreamId::imu, kFault, 5.0),
@@ -272,7 +281,8 @@ TEST(FaultInjectionGins, ImuAndClockBack) {
                          window("IMU NaN stamp 5 s", FaultKind::nan_stamp, StreamId::imu, kFault, 5.0),
                          window("IMU dropout 10 s", FaultKind::dropout, StreamId::imu, kFault, 10.0),
                          window("IMU duplicated 10 s", FaultKind::duplicate, StreamId::imu, kFault, 10.0),
-                         window("IMU out of order 10 s", FaultKind::out_of_order, StreamId::imu, kFault, 10.0), back})
+                         window("IMU out of order 10 s", FaultKind::out_of_order, StreamId::imu, kFault, 10.0),
+                         window("clock +5 s", FaultKind::clock_jump, StreamId::all, kFault + 0.5, 0.0), back})
     check_fault(f);
 }
 

@@ -35,6 +35,7 @@ struct GinsOptions {
   double gnss_rate = 0.0, imu_delay = 0.0;
   bool smooth = false;
   std::vector<double> imu_rpy{0.0, 0.0, 0.0}, imu_lever{0.0, 0.0, 0.0}, gnss_lever{0.0, 0.0, 0.0};
+  std::vector<double> imu_noise;  // gyro [deg/s/sqrt(Hz)], accel [m/s^2/sqrt(Hz)]; empty: the settings'
 };
 
 // "LEN:PERIOD:START" -> schedule; an empty string when it parses, the problem otherwise.
@@ -104,6 +105,10 @@ std::shared_ptr<void> add_options(CLI::App& app) {
   app.add_option("--gnss-lever", o->gnss_lever, "GNSS antenna from the system origin: forward,right,down [m]")
       ->delimiter(',')->expected(3)->check(kFinite);
   app.add_option("--imu-delay", o->imu_delay, "logging delay added to IMU time [s]")->check(CLI::Range(-10.0, 10.0));
+  app.add_option("--imu-noise", o->imu_noise,
+                 "white-noise densities GYRO,ACCEL [deg/s/sqrt(Hz), m/s^2/sqrt(Hz)] instead of the pipeline's "
+                 "(pipelines/gins/settings.hpp), for sensitivity studies")
+      ->delimiter(',')->expected(2)->check(CLI::PositiveNumber);
   return o;
 }
 
@@ -160,7 +165,11 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
   ro.installation.imu_lever_m = Eigen::Vector3d(o.imu_lever[0], o.imu_lever[1], o.imu_lever[2]);
   ro.installation.gnss_lever_m = Eigen::Vector3d(o.gnss_lever[0], o.gnss_lever[1], o.gnss_lever[2]);
   ro.installation.imu_delay_s = o.imu_delay;
-  const gins::Settings settings;
+  gins::Settings settings;
+  if (o.imu_noise.size() == 2) {
+    settings.gyro_noise_density = o.imu_noise[0] * gins::kDeg;
+    settings.accel_noise_density = o.imu_noise[1];
+  }
   gins::Recording rec;
   gins::RunResult res;
   {
@@ -191,10 +200,13 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
   const double t0 = rec.fixes.empty() ? 0.0 : rec.fixes.front().t;
   out << formatted("gins on %s: %zu IMU samples (%.2f Hz), %zu fixes; aligned %.2f s after the first fix\n", in.data_dir.string().c_str(),
                    rec.imu.size(), res.imu_rate_hz, rec.fixes.size(), res.alignment_time - t0);
-  out << formatted("  GNSS used %zu, withheld %zu, decimated %zu, gated %zu (released %zu); velocity %zu (gated %zu)\n", c.gnss_used,
-                   c.gnss_withheld, c.gnss_decimated, c.gnss_gated, c.gnss_released, c.velocity_used, c.velocity_gated);
+  out << formatted("  GNSS used %zu, withheld %zu, decimated %zu, gated %zu (released %zu); velocity %zu (gated %zu, released %zu)\n",
+                   c.gnss_used, c.gnss_withheld, c.gnss_decimated, c.gnss_gated, c.gnss_released, c.velocity_used, c.velocity_gated,
+                   c.velocity_released);
   out << formatted("  ZUPT %zu (gated %zu), ZIHR %zu (%zu), NHC %zu (%zu), mag %zu (%zu); static samples %zu\n", c.zupt, c.zupt_gated,
                    c.zihr, c.zihr_gated, c.nhc, c.nhc_gated, c.mag, c.mag_gated, c.static_samples);
+  if (c.imu_losses > 0)
+    out << formatted("  IMU gaps past %.1f s: %zu (re-aligned after %zu)\n", settings.imu_max_unmeasured_s, c.imu_losses, c.realignments);
   Json doc;
   doc["pipeline_name"] = "gins";
   doc["data"] = in.data_dir.string();
@@ -211,7 +223,7 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
   Json counts;
   for (const auto& [k, v] : {std::pair{"gnss_used", c.gnss_used}, {"gnss_withheld", c.gnss_withheld}, {"gnss_decimated", c.gnss_decimated},
                              {"gnss_gated", c.gnss_gated}, {"gnss_released", c.gnss_released}, {"velocity_used", c.velocity_used},
-                             {"velocity_gated", c.velocity_gated}, {"zupt", c.zupt}, {"zupt_gated", c.zupt_gated}, {"zihr", c.zihr},
+                             {"velocity_gated", c.velocity_gated}, {"velocity_released", c.velocity_released}, {"imu_losses", c.imu_losses}, {"realignments", c.realignments}, {"zupt", c.zupt}, {"zupt_gated", c.zupt_gated}, {"zihr", c.zihr},
                              {"zihr_gated", c.zihr_gated}, {"nhc", c.nhc}, {"nhc_gated", c.nhc_gated}, {"mag", c.mag},
                              {"mag_gated", c.mag_gated}, {"static_samples", c.static_samples}, {"imu_refused", c.imu_refused},
                              {"filter_failures", c.filter_failures}})
@@ -220,9 +232,11 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
   Json st;
   st["samples"] = ss.samples;
   st["duration_s"] = ss.duration_s;
+  st["allan_differences"] = ss.allan_differences;
   const double d = 1.0 / gins::kDeg;
   for (const auto& [k, v, scale] : {std::tuple{"gyro_std_dps", ss.gyro_std, d}, {"gyro_mean_dps", ss.gyro_mean, d},
-                                    {"accel_std_mps2", ss.accel_std, 1.0}, {"accel_mean_mps2", ss.accel_mean, 1.0}}) {
+                                    {"accel_std_mps2", ss.accel_std, 1.0}, {"accel_mean_mps2", ss.accel_mean, 1.0},
+                                    {"gyro_allan_1s_dps", ss.gyro_allan_1s, d}, {"accel_allan_1s_mps2", ss.accel_allan_1s, 1.0}}) {
     Json a = Json::array();
     for (int i = 0; i < 3; ++i) a.push_back(v(i) * scale);
     st[k] = std::move(a);

@@ -56,6 +56,7 @@ class RtsRecorder {
     Belief prior;                    // after the predictions into this epoch, before its updates
     Belief posterior;                // after its updates; smoothed in place by smooth()
     SquareMatrix<N> transition;      // from the previous epoch's posterior to this prior
+    bool restarts = false;           // a new start (restart()): nothing links it to the epoch before
   };
 
   void reserve(std::size_t epochs) { records_.reserve(epochs); }
@@ -65,6 +66,20 @@ class RtsRecorder {
     records_.push_back(Record{t, posterior, posterior, SquareMatrix<N>::Identity()});
     phi_.setIdentity();
     smoothed_ = false;
+  }
+
+  /// A new start after the filter lost its state (e.g. an INS re-aligned after an IMU gap):
+  /// the epochs before and after are smoothed as two runs, nothing carried across.
+  Status restart(double t, const Belief& posterior) {
+    if (records_.empty()) {
+      start(t, posterior);
+      return Status{};
+    }
+    if (!(t > records_.back().t)) return Status::invalid(Problem::out_of_order_time);
+    records_.push_back(Record{t, posterior, posterior, SquareMatrix<N>::Identity(), true});
+    phi_.setIdentity();
+    smoothed_ = false;
+    return Status{};
   }
 
   /// One prediction's transition F (eskf::predict's F_used), composed since the last epoch.
@@ -103,6 +118,11 @@ class RtsRecorder {
     for (std::size_t k = records_.size() - 1; k-- > 0;) {
       Record& r = records_[k];
       const Record& n = records_[k + 1];
+      if (n.restarts) {  // the last epoch of the run before: its filtered belief stands
+        Ps_next = r.posterior.cov;
+        xs_next = r.posterior.nominal;
+        continue;
+      }
       const SquareMatrix<N>* pbar = &n.prior.cov;
       SquareMatrix<N> without_held;
       for (int j = 0; j < N; ++j) {

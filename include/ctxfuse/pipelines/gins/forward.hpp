@@ -9,11 +9,15 @@
 //                     gate; a withheld fix still closes an epoch, so the trajectory has a row
 //                     at every GNSS stamp.
 // Before the filter starts it levels on the static start (roll, pitch, gyro bias from the
-// mean of its samples) and waits for a dynamic alignment (two used fixes 1 s and > 5 m apart).
+// mean of its samples) and waits for a dynamic alignment (two used fixes 1 s and > 2 m apart).
+// More than Settings::imu_max_unmeasured_s without a measured IMU sample loses it: it re-aligns
+// the same way once the IMU is back (lose, try_align). A GNSS position or velocity the gate
+// refuses three times in a row is released (release).
 // An epoch is every time at which a row is wanted or an update happens; its prior and
 // posterior are recorded for the RTS smoother.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <functional>
@@ -57,9 +61,10 @@ models::NavState nav_part(const typename Model::State& x) {
 struct PassCounts {
   std::size_t imu_steps = 0, imu_refused = 0, filter_failures = 0;
   std::size_t gnss_used = 0, gnss_withheld = 0, gnss_decimated = 0, gnss_gated = 0, gnss_refused = 0, gnss_released = 0;
-  std::size_t velocity_used = 0, velocity_gated = 0;
+  std::size_t velocity_used = 0, velocity_gated = 0, velocity_released = 0;
   std::size_t zupt = 0, zupt_gated = 0, zihr = 0, zihr_gated = 0, nhc = 0, nhc_gated = 0, mag = 0, mag_gated = 0;
   std::size_t static_samples = 0;
+  std::size_t imu_losses = 0, realignments = 0;  // IMU gaps past imu_max_unmeasured_s, and re-alignments after them
 };
 
 template <class Model>
@@ -98,15 +103,33 @@ class ForwardPass {
   }
 
   void propagate(const io::ImuSample& u, double dt) {
-    if (!aligned_) return;
-    close_epoch();
     models::BodyIncrements inc;
+    if (!aligned_) {
+      // Lost (below): a new sample the strapdown takes means the IMU is back.
+      if (lost_ && u.t != sample_t_) {
+        if (imu_.from_rates(u.gyro, u.accel, dt, inc).accepted()) imu_back_ = true;
+        else ++counts_.imu_refused;
+      }
+      return;
+    }
+    close_epoch();
     // A refused sample (non-finite, absurd) is replaced by the last accepted one over its
     // interval (models/held_input.hpp): time and covariance advance.
     const models::InputUse use =
         held_imu_.apply(u, [&](const io::ImuSample& s) { return imu_.from_rates(s.gyro, s.accel, dt, inc); });
     if (use != models::InputUse::taken) ++counts_.imu_refused;
     if (use == models::InputUse::lost) return;
+    // Time no sample measured: a refused sample's interval, and a sample's beyond imu_hold_s
+    // after its stamp (the next did not come). Past imu_max_unmeasured_s in a row the
+    // strapdown has nothing to go on: the pass is lost and re-aligns (lose, try_align).
+    if (u.t != sample_t_) sample_t_ = u.t, sample_elapsed_ = 0.0;
+    sample_elapsed_ += dt;
+    const bool measured = use == models::InputUse::taken && sample_elapsed_ <= s_.imu_hold_s;
+    unmeasured_ = measured ? 0.0 : unmeasured_ + dt;
+    if (unmeasured_ > s_.imu_max_unmeasured_s) {
+      lose();
+      return;
+    }
     SquareMatrix<Model::dim> F;
     const Status st = eskf::predict(model_, belief_, inc, dt, {}, &F);
     if (!st.accepted()) {
@@ -128,8 +151,8 @@ class ForwardPass {
     }
     const bool st = detector_.push(w, f, horizontal);
     if (st) ++counts_.static_samples;
-    // The static start: every static sample before the alignment.
-    if (st && !aligned_) {
+    // The static start: every static sample before the (first) alignment.
+    if (st && !aligned_ && !lost_) {
       start_acc_.add(u.t, w, f);
       start_ = start_acc_.stats();
     }
@@ -174,7 +197,7 @@ class ForwardPass {
     const Eigen::Vector3d z(fix.position(0) * kDeg, fix.position(1) * kDeg, fix.position(2));
     const Eigen::Matrix3d cov = floored(models::ned_from_enu_cov(fix.cov), s_.gnss_position_sigma_floor_m);
     if (!aligned_) {
-      if (use) try_align(fix, z, cov);
+      if (use && (!lost_ || imu_back_)) try_align(fix, z, cov);
       return;
     }
     open_epoch(fix.t);
@@ -185,12 +208,9 @@ class ForwardPass {
     }
     gnss_.R = models::geodetic_position_noise(z, cov);
     // After gate_release_count fixes in a row refused by the gate it is the filter that is
-    // off, not the receiver: the next fix is released into the filter (release_fix; the
-    // counts say so).
-    const bool release = gated_in_row_ >= s_.gate_release_count;
-    const Status st = release ? release_fix(z) : eskf::update(model_, gnss_, belief_, z, gate_);
-    gated_in_row_ = st.outcome == Outcome::gated ? gated_in_row_ + 1 : 0;
-    counts_.gnss_released += release && st.accepted() ? 1 : 0;
+    // off, not the receiver: the next fix is released into the filter (release; the counts
+    // say so). The fix's velocity below, the same.
+    const Status st = update_or_release<"p">(gnss_, z, gated_in_row_, counts_.gnss_released);
     if (st.accepted()) {
       ++counts_.gnss_used;
       pending_used_ = 1;
@@ -203,7 +223,9 @@ class ForwardPass {
       const Eigen::Vector3d v(fix.velocity->y(), fix.velocity->x(), -fix.velocity->z());
       gnss_velocity_.R = floored(models::ned_from_enu_cov(fix.velocity_cov), s_.gnss_velocity_sigma_floor_mps);
       gnss_velocity_.gyro = gyro_body_;
-      if (gnss_velocity_.R.allFinite()) count(eskf::update(model_, gnss_velocity_, belief_, v, gate_), counts_.velocity_used, counts_.velocity_gated);
+      if (gnss_velocity_.R.allFinite())
+        count(update_or_release<"v">(gnss_velocity_, v, velocity_gated_in_row_, counts_.velocity_released),
+              counts_.velocity_used, counts_.velocity_gated);
     }
   }
 
@@ -238,27 +260,41 @@ class ForwardPass {
     if (rts_.record(open_t_, prior_, belief_).accepted()) used_.push_back(pending_used_);
     pending_used_ = 0;
   }
-  /// A released fix (gate_release_count gated in a row): the position's variance is widened,
-  /// by the same amount on each axis, just enough that the fix's innovation lies on the gate's
-  /// boundary, and the fix then updates the filter as usual. An update of the unwidened
-  /// covariance with the gate off takes a fix 100 m off (a jump) at the confidence of a
-  /// converged filter and drags velocity and attitude through their correlations with the
+  /// A GNSS position or velocity through the gate, or released: after gate_release_count
+  /// in a row refused by the gate, the next one is released (release).
+  template <FixedString Name, class Meas>
+  Status update_or_release(const Meas& meas, const Vector<3>& z, int& gated_in_row, std::size_t& released) {
+    const bool release_now = gated_in_row >= s_.gate_release_count;
+    const Status st = release_now ? release<Name>(meas, z) : eskf::update(model_, meas, belief_, z, gate_);
+    gated_in_row = st.outcome == Outcome::gated ? gated_in_row + 1 : 0;
+    released += release_now && st.accepted() ? 1 : 0;
+    return st;
+  }
+  /// A released measurement of block Name (position or velocity): that block's variance is
+  /// widened, by the same amount on each axis, just enough that the innovation lies on the
+  /// gate's boundary, and the measurement then updates the filter as usual. An update of the
+  /// unwidened covariance with the gate off takes a fix 100 m off (a jump) at the confidence of
+  /// a converged filter and drags velocity and attitude through their correlations with the
   /// position (the INS ran away to 217 m). A position reset (PX4 EKF2's), which drops those
   /// correlations, recovers from the jump too, but after a real outage it is through them that
-  /// a late fix corrects the heading (docs/reliability.md, "The NLOS UWB and GNSS/INS pipelines").
-  Status release_fix(const Eigen::Vector3d& z) {
+  /// a late fix corrects the heading (docs/reliability.md, "The NLOS UWB and GNSS/INS
+  /// pipelines"). The velocity is released by the same rule: a filter whose velocity is off
+  /// by more than its covariance admits refuses every GNSS velocity, and the position's release
+  /// alone brings it back only slowly (GinsPipeline.GnssPositionAndVelocityAreReleasedAfterAnImuFault).
+  template <FixedString Name, class Meas>
+  Status release(const Meas& meas, const Vector<3>& z) {
     using L = typename S::ErrorLayout;
-    constexpr int o = L::template offset<"p">();
+    constexpr int o = L::template offset<Name>();
     Matrix<3, Model::dim> H;
-    const Eigen::Vector3d y = gnss_.residual(z, gnss_.predict(belief_.nominal, &H));
-    const Eigen::Matrix3d S0 = H * belief_.cov * H.transpose() + gnss_.R;
+    const Eigen::Vector3d y = ctxfuse::detail::innovation(meas, z, meas.predict(belief_.nominal, &H));
+    const Eigen::Matrix3d S0 = H * belief_.cov * H.transpose() + meas.noise(belief_.nominal);
     if (!y.allFinite() || !S0.allFinite()) return Status::invalid(Problem::non_finite_prediction);
-    const Eigen::Matrix3d Hp = H.template middleCols<3>(o);
-    const Eigen::Matrix3d dS = Hp * Hp.transpose();  // dS / d(the variance added to each axis)
+    const Eigen::Matrix3d Hb = H.template middleCols<3>(o);
+    const Eigen::Matrix3d dS = Hb * Hb.transpose();  // dS / d(the variance added to each axis)
     const double limit = gate_.threshold(3);
     auto nis = [&](double added) { return y.dot((S0 + added * dS).ldlt().solve(y)); };
-    if (!(nis(0.0) > limit)) return eskf::update(model_, gnss_, belief_, z);
-    // NIS falls monotonically with the added variance [m^2]: bracket, then bisect.
+    if (!(nis(0.0) > limit)) return eskf::update(model_, meas, belief_, z);
+    // NIS falls monotonically with the added variance: bracket, then bisect.
     double lo = 0.0, hi = 1e-4;
     while (nis(hi) > limit && hi < 1e12) lo = hi, hi *= 4.0;
     for (int i = 0; i < 40; ++i) {
@@ -267,7 +303,7 @@ class ForwardPass {
     }
     B widened = belief_;
     widened.cov.template block<3, 3>(o, o).diagonal().array() += hi;
-    const Status st = eskf::update(model_, gnss_, widened, z);
+    const Status st = eskf::update(model_, meas, widened, z);
     if (st.accepted()) belief_ = widened;
     return st;
   }
@@ -282,14 +318,39 @@ class ForwardPass {
     else ++counts_.filter_failures;
   }
 
+  /// The IMU stopped measuring (a dropout, refused samples, a clock jump) for longer than a
+  /// held sample can stand for a car's motion: the pass stops, keeps what the gap does not
+  /// change (biases, mounting, lever arm, roll and pitch) and re-aligns from the next two good
+  /// fixes once the IMU is back, as at the start. The RTS records restart there.
+  void lose() {
+    lost_belief_ = belief_;
+    aligned_ = false;
+    lost_ = true;
+    imu_back_ = false;
+    unmeasured_ = 0.0;
+    models::DynamicAlignment fresh;
+    fresh.interval = align_.interval;
+    fresh.min_distance = align_.min_distance;
+    align_ = fresh;
+    held_heading_.reset();
+    mag_ = models::MagRelativeHeading{};  // its reference attitude is the lost one
+    gated_in_row_ = velocity_gated_in_row_ = 0;
+    ++counts_.imu_losses;
+  }
+
   void try_align(const io::GnssFix& fix, const Eigen::Vector3d& z, const Eigen::Matrix3d& cov) {
     const bool good = fix.quality == io::FixQuality::fixed || fix.quality == io::FixQuality::floating;
     const auto x = align_.push({fix.t, z, good && cov.allFinite()});
     if (!x) return;
     models::NavState nav = *x;
-    // Roll and pitch from the static start's mean specific force (f = -C' g at rest).
+    // Roll and pitch from the static start's mean specific force (f = -C' g at rest); after a
+    // loss, the filter's own.
     double roll = 0.0, pitch = 0.0;
-    if (start_.samples > 0) {
+    if (lost_) {
+      const Eigen::Matrix3d C = nav_part<Model>(lost_belief_.nominal).template get<"theta">().toRotationMatrix();
+      roll = std::atan2(C(2, 1), C(2, 2));
+      pitch = -std::asin(std::clamp(C(2, 0), -1.0, 1.0));
+    } else if (start_.samples > 0) {
       const Eigen::Vector3d& f = start_.accel_mean;
       roll = std::atan2(-f(1), -f(2));
       pitch = std::atan2(f(0), std::hypot(f(1), f(2)));
@@ -304,12 +365,17 @@ class ForwardPass {
     nav.get<"theta">() = q;
     // The static mean holds the earth's rate too, which the full mechanisation models.
     if (start_.samples > 0) nav.get<"bg">() = start_.gyro_mean - q.conjugate() * earth::earth_rate_ned(z(0));
+    if (lost_) {
+      nav.get<"bg">() = nav_part<Model>(lost_belief_.nominal).template get<"bg">();
+      nav.get<"ba">() = nav_part<Model>(lost_belief_.nominal).template get<"ba">();
+    }
     if (fix.velocity) nav.get<"v">() = Eigen::Vector3d(fix.velocity->y(), fix.velocity->x(), -fix.velocity->z());
     nav.get<"p">() = earth::GeodeticRetraction::inject(z, -(q * gnss_.lever_arm));
     B b;
     if constexpr (requires { Model::set_base_part(b.nominal, nav); }) {
+      if (lost_) b.nominal = lost_belief_.nominal;  // the extra blocks as they were
       Model::set_base_part(b.nominal, nav);
-      b.nominal.template get<"lever">() = nhc_.vehicle.lever_arm;
+      if (!lost_) b.nominal.template get<"lever">() = nhc_.vehicle.lever_arm;
     } else {
       b.nominal = nav;
     }
@@ -325,9 +391,24 @@ class ForwardPass {
       L::template cov<"mount">(b.cov).diagonal().setConstant(s_.initial_mount_sigma * s_.initial_mount_sigma);
       L::template cov<"lever">(b.cov).diagonal().setConstant(s_.initial_lever_sigma * s_.initial_lever_sigma);
     }
+    if (lost_) {  // what the gap did not change keeps its own (marginal) covariance
+      L::template cov<"bg">(b.cov) = L::template cov<"bg">(lost_belief_.cov);
+      L::template cov<"ba">(b.cov) = L::template cov<"ba">(lost_belief_.cov);
+      if constexpr (S::has("mount")) {
+        L::template cov<"mount">(b.cov) = L::template cov<"mount">(lost_belief_.cov);
+        L::template cov<"lever">(b.cov) = L::template cov<"lever">(lost_belief_.cov);
+      }
+    }
     belief_ = b;
-    rts_.start(fix.t, belief_);
-    used_.assign(1, 1);
+    if (lost_) {
+      if (!rts_.restart(fix.t, belief_).accepted()) return;
+      used_.push_back(1);
+      ++counts_.realignments;
+    } else {
+      rts_.start(fix.t, belief_);
+      used_.assign(1, 1);
+    }
+    lost_ = false;
     aligned_ = true;
     align_t_ = fix.t;
     next_constraint_t_ = fix.t;
@@ -364,7 +445,12 @@ class ForwardPass {
   std::function<void(double)> progress_;
   double t_first_ = 0.0, t_span_ = 1.0;
   int since_progress_ = 0;
-  int gated_in_row_ = 0;
+  int gated_in_row_ = 0, velocity_gated_in_row_ = 0;
+  // IMU gaps (propagate, lose): the sample in force, how long it has been, the unmeasured time
+  // in a row; the belief when the pass was lost.
+  double sample_t_ = NAN, sample_elapsed_ = 0.0, unmeasured_ = 0.0;
+  bool lost_ = false, imu_back_ = false;
+  B lost_belief_{};
 };
 
 }  // namespace ctxfuse::pipelines::gins

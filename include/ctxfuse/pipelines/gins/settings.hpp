@@ -38,11 +38,26 @@ struct Settings {
   // figures). In the car the idling engine shakes the IMU far more: over the drive's static
   // start (3061 static samples before the alignment, `ctxfuse run gins --data DIR --json`,
   // "static_start") the 100 Hz samples scatter by 0.393 / 2.324 / 0.128 deg/s (gyro) and
-  // 0.088 / 0.086 / 0.130 m/s^2 (accelerometer) per body axis. That scatter is the white noise
-  // the filter integrates, and the strapdown noise is isotropic, so each density is the
-  // largest axis' std / sqrt(100 Hz): 0.233 deg/s/sqrt(Hz) and 0.013 m/s^2/sqrt(Hz).
-  double gyro_noise_density = 0.233 * kDeg;  // [rad/s/sqrt(Hz)]
-  double accel_noise_density = 0.013;        // [m/s^2/sqrt(Hz)]
+  // 0.088 / 0.086 / 0.130 m/s^2 per body axis. That scatter is mostly vibration at tens of Hz,
+  // which the strapdown integration averages out; what it integrates into attitude and
+  // velocity error is the noise at the filter's time scales, the Allan deviation at 1 s of the
+  // same samples (IEEE Std 952, annex C: white noise of density N gives N at 1 s;
+  // "gyro_allan_1s_dps", "accel_allan_1s_mps2"): 0.028 / 0.099 / 0.026 deg/s and 0.0147 /
+  // 0.0101 / 0.0115 m/s^2, from 33 cluster differences (about 12 % statistical uncertainty).
+  // The scatter read as white noise (std / sqrt(100 Hz)) would claim 0.233 deg/s/sqrt(Hz),
+  // 2.4x more. The strapdown noise is isotropic: each density is the largest axis' figure.
+  double gyro_noise_density = 0.099 * kDeg;  // [rad/s/sqrt(Hz)]
+  double accel_noise_density = 0.0147;       // [m/s^2/sqrt(Hz)]
+  // --- IMU gaps ---------------------------------------------------------------------------
+  // A sample stands for the motion until the next one; held longer than imu_hold_s (the next
+  // did not come), or refused and replaced by the last one, the time is unmeasured. A car's
+  // yaw rate changes by several deg/s within a second (a 90 deg turn at a junction takes
+  // 5-10 s, 9-18 deg/s reached within a second or two), so a sample held for 1 s is off by
+  // about 2 deg in heading (1/2 x 4 deg/s^2 x 1 s^2), the heading sigma of an alignment: past
+  // imu_max_unmeasured_s in a row the pass stops and re-aligns from the fixes
+  // (ForwardPass::lose). 50 ms is five sample intervals at 100 Hz, one at 20 Hz.
+  double imu_hold_s = 0.05;
+  double imu_max_unmeasured_s = 1.0;
   // --- Bias instability (data sheet, as random walks) -------------------------------------
   double gyro_bias_density = 3.8e-5 * kDeg;                // [rad/s^2/sqrt(Hz)]
   double accel_bias_density = 7e-6 * kStandardGravity;     // [m/s^3/sqrt(Hz)]
@@ -79,7 +94,8 @@ struct Settings {
   // Textbook one-tailed test at 99.9 %: a fix outside it is refused, not forced in.
   double gate_probability = 0.999;
   // Three fixes in a row outside the gate (3 s at 1 Hz) cannot all be receiver faults at
-  // 1 - 0.999 each: the next one is applied without the gate.
+  // 1 - 0.999 each: the next one is released into the filter (ForwardPass::release). The
+  // fixes' positions and velocities count their refusals separately.
   int gate_release_count = 3;
 
   // --- Constraints ------------------------------------------------------------------------

@@ -75,12 +75,70 @@ class VibrationStaticDetector {
   bool static_ = false, entered_ = false;
 };
 
-/// Mean and standard deviation of the body-frame rates and specific force over one static run.
+/// Allan deviation of a 3-axis stream at one cluster time tau, from non-overlapping clusters
+/// (IEEE Std 952-1997, annex C): sigma^2(tau) = 1/2 <(mean_{k+1} - mean_k)^2> over successive
+/// clusters of tau seconds, by the samples' own time stamps. For white noise of density N
+/// (units/sqrt(Hz)) sigma(tau) = N / sqrt(tau), so sigma at tau = 1 s reads N; vibration at tens
+/// of Hz averages out within a cluster and adds next to nothing, while it dominates the
+/// per-sample standard deviation. A sample more than tau after the previous one (the run was
+/// interrupted) ends the chain: no difference spans a gap. Constant memory.
+class AllanAccumulator {
+ public:
+  explicit AllanAccumulator(double tau_s = 1.0) : tau_(tau_s) {}
+
+  void add(double t, const Eigen::Vector3d& x) {
+    if (!std::isfinite(t) || !x.allFinite()) return;
+    if (n_ > 0 && (t < last_t_ || t - last_t_ > tau_)) {  // a gap (or time back): a new chain
+      have_previous_ = false;
+      n_ = 0;
+    }
+    if (n_ == 0) {
+      start_ = t;
+    } else if (t >= start_ + tau_) {
+      close_cluster();
+      start_ += tau_;
+    }
+    sum_ += x;
+    ++n_;
+    last_t_ = t;
+  }
+  /// Per-axis Allan deviation at tau; zero until two successive clusters closed.
+  Eigen::Vector3d deviation() const {
+    if (differences_ == 0) return Eigen::Vector3d::Zero();
+    return (squares_ / (2.0 * static_cast<double>(differences_))).cwiseSqrt();
+  }
+  std::size_t differences() const { return differences_; }
+  double tau() const { return tau_; }
+
+ private:
+  void close_cluster() {
+    const Eigen::Vector3d mean = sum_ / static_cast<double>(n_);
+    if (have_previous_) {
+      squares_ += (mean - previous_).cwiseAbs2();
+      ++differences_;
+    }
+    previous_ = mean;
+    have_previous_ = true;
+    sum_.setZero();
+    n_ = 0;
+  }
+  double tau_;
+  double start_ = 0.0, last_t_ = 0.0;
+  Eigen::Vector3d sum_ = Eigen::Vector3d::Zero(), previous_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d squares_ = Eigen::Vector3d::Zero();
+  std::size_t n_ = 0, differences_ = 0;
+  bool have_previous_ = false;
+};
+
+/// Mean, standard deviation and Allan deviation at 1 s of the body-frame rates and specific
+/// force over one static run.
 struct StaticStats {
   std::size_t samples = 0;
   double duration_s = 0.0;  // first to last static sample (the run may have moving gaps)
   Eigen::Vector3d gyro_mean = Eigen::Vector3d::Zero(), gyro_std = Eigen::Vector3d::Zero();
   Eigen::Vector3d accel_mean = Eigen::Vector3d::Zero(), accel_std = Eigen::Vector3d::Zero();
+  Eigen::Vector3d gyro_allan_1s = Eigen::Vector3d::Zero(), accel_allan_1s = Eigen::Vector3d::Zero();
+  std::size_t allan_differences = 0;  // cluster pairs behind the Allan deviations
 };
 
 class StaticAccumulator {
@@ -93,6 +151,8 @@ class StaticAccumulator {
     sgg_ += gyro.cwiseAbs2();
     sa_ += accel;
     saa_ += accel.cwiseAbs2();
+    allan_gyro_.add(t, gyro);
+    allan_accel_.add(t, accel);
   }
   void clear() { *this = StaticAccumulator{}; }
   std::size_t samples() const { return n_; }
@@ -106,6 +166,9 @@ class StaticAccumulator {
     s.accel_mean = sa_ / n;
     s.gyro_std = (sgg_ / n - s.gyro_mean.cwiseAbs2()).cwiseMax(0.0).cwiseSqrt();
     s.accel_std = (saa_ / n - s.accel_mean.cwiseAbs2()).cwiseMax(0.0).cwiseSqrt();
+    s.gyro_allan_1s = allan_gyro_.deviation();
+    s.accel_allan_1s = allan_accel_.deviation();
+    s.allan_differences = allan_gyro_.differences();
     return s;
   }
 
@@ -114,6 +177,7 @@ class StaticAccumulator {
   double t0_ = 0.0, t1_ = 0.0;
   Eigen::Vector3d sg_ = Eigen::Vector3d::Zero(), sgg_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d sa_ = Eigen::Vector3d::Zero(), saa_ = Eigen::Vector3d::Zero();
+  AllanAccumulator allan_gyro_{1.0}, allan_accel_{1.0};
 };
 
 }  // namespace ctxfuse::pipelines::gins
