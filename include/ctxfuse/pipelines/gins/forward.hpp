@@ -33,15 +33,11 @@
 #include "ctxfuse/models/ins_motion.hpp"
 #include "ctxfuse/models/ins_updates.hpp"
 #include "ctxfuse/pipelines/gins/gnss_schedule.hpp"
+#include "ctxfuse/pipelines/gins/initial_belief.hpp"
 #include "ctxfuse/pipelines/gins/settings.hpp"
 #include "ctxfuse/pipelines/gins/static_start.hpp"
 
 namespace ctxfuse::pipelines::gins {
-
-using Nav15 = models::InsNavModel<models::FullStrapdown>;
-/// The 20-state layout: mounting pitch/heading of the vehicle in the body frame and the lever
-/// arm from the IMU to the vehicle point where the non-holonomic constraint holds.
-using Nav20 = models::Augmented<Nav15, Block<"mount", 2>, Block<"lever", 3>>;
 
 /// The installation's IMU axes turned by yaw, then pitch, then roll (about the turned axes) are
 /// the body axes: R = Rz(yaw) Ry(pitch) Rx(roll) holds the body axes in IMU coordinates, so a
@@ -53,10 +49,6 @@ inline Eigen::Matrix3d body_from_imu(const Installation& inst) {
   return models::mounting_rotation(a(0), a(1), a(2)).transpose();
 }
 
-template <class Model>
-models::NavState nav_part(const typename Model::State& x) {
-  if constexpr (requires { Model::base_part(x); }) return Model::base_part(x); else return x;
-}
 
 struct PassCounts {
   std::size_t imu_steps = 0, imu_refused = 0, filter_failures = 0;
@@ -342,64 +334,8 @@ class ForwardPass {
     const bool good = fix.quality == io::FixQuality::fixed || fix.quality == io::FixQuality::floating;
     const auto x = align_.push({fix.t, z, good && cov.allFinite()});
     if (!x) return;
-    models::NavState nav = *x;
-    // Roll and pitch from the static start's mean specific force (f = -C' g at rest); after a
-    // loss, the filter's own.
-    double roll = 0.0, pitch = 0.0;
-    if (lost_) {
-      const Eigen::Matrix3d C = nav_part<Model>(lost_belief_.nominal).template get<"theta">().toRotationMatrix();
-      roll = std::atan2(C(2, 1), C(2, 2));
-      pitch = -std::asin(std::clamp(C(2, 0), -1.0, 1.0));
-    } else if (start_.samples > 0) {
-      const Eigen::Vector3d& f = start_.accel_mean;
-      roll = std::atan2(-f(1), -f(2));
-      pitch = std::atan2(f(0), std::hypot(f(1), f(2)));
-    }
-    // Heading: the fix's own velocity direction when it has one (the instant's track; the
-    // displacement over the last second lags a turn by half a second), else the displacement.
-    double yaw = models::heading_of(nav.get<"theta">().toRotationMatrix());
-    if (fix.velocity && fix.velocity->head<2>().norm() > 0.5 * s_.alignment_min_distance_m / s_.alignment_interval_s)
-      yaw = std::atan2(fix.velocity->x(), fix.velocity->y());
-    const Eigen::Quaterniond q = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
-                                 Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX());
-    nav.get<"theta">() = q;
-    // The static mean holds the earth's rate too, which the full mechanisation models.
-    if (start_.samples > 0) nav.get<"bg">() = start_.gyro_mean - q.conjugate() * earth::earth_rate_ned(z(0));
-    if (lost_) {
-      nav.get<"bg">() = nav_part<Model>(lost_belief_.nominal).template get<"bg">();
-      nav.get<"ba">() = nav_part<Model>(lost_belief_.nominal).template get<"ba">();
-    }
-    if (fix.velocity) nav.get<"v">() = Eigen::Vector3d(fix.velocity->y(), fix.velocity->x(), -fix.velocity->z());
-    nav.get<"p">() = earth::GeodeticRetraction::inject(z, -(q * gnss_.lever_arm));
-    B b;
-    if constexpr (requires { Model::set_base_part(b.nominal, nav); }) {
-      if (lost_) b.nominal = lost_belief_.nominal;  // the extra blocks as they were
-      Model::set_base_part(b.nominal, nav);
-      if (!lost_) b.nominal.template get<"lever">() = nhc_.vehicle.lever_arm;
-    } else {
-      b.nominal = nav;
-    }
-    using L = typename Model::ErrorLayout;
-    b.cov.setZero();
-    L::template cov<"p">(b.cov) = cov;
-    L::template cov<"v">(b.cov).diagonal().setConstant(s_.initial_velocity_sigma * s_.initial_velocity_sigma);
-    const double rp = s_.initial_roll_pitch_sigma * s_.initial_roll_pitch_sigma;
-    L::template cov<"theta">(b.cov).diagonal() << rp, rp, s_.initial_heading_sigma * s_.initial_heading_sigma;
-    L::template cov<"bg">(b.cov).diagonal().setConstant(s_.initial_gyro_bias_sigma * s_.initial_gyro_bias_sigma);
-    L::template cov<"ba">(b.cov).diagonal().setConstant(s_.initial_accel_bias_sigma * s_.initial_accel_bias_sigma);
-    if constexpr (S::has("mount")) {
-      L::template cov<"mount">(b.cov).diagonal().setConstant(s_.initial_mount_sigma * s_.initial_mount_sigma);
-      L::template cov<"lever">(b.cov).diagonal().setConstant(s_.initial_lever_sigma * s_.initial_lever_sigma);
-    }
-    if (lost_) {  // what the gap did not change keeps its own (marginal) covariance
-      L::template cov<"bg">(b.cov) = L::template cov<"bg">(lost_belief_.cov);
-      L::template cov<"ba">(b.cov) = L::template cov<"ba">(lost_belief_.cov);
-      if constexpr (S::has("mount")) {
-        L::template cov<"mount">(b.cov) = L::template cov<"mount">(lost_belief_.cov);
-        L::template cov<"lever">(b.cov) = L::template cov<"lever">(lost_belief_.cov);
-      }
-    }
-    belief_ = b;
+    belief_ = initial_belief<Model>(s_, *x, fix, z, cov, gnss_.lever_arm, nhc_.vehicle.lever_arm, start_,
+                                    lost_ ? &lost_belief_ : nullptr);
     if (lost_) {
       if (!rts_.restart(fix.t, belief_).accepted()) return;
       used_.push_back(1);
