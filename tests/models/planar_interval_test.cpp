@@ -52,8 +52,11 @@ TEST(PlanarImuInterval, PredictionChainsTheSamplesStepsWithAContinuousHeading) {
   EXPECT_GT(psi, std::numbers::pi);
   EXPECT_NEAR(got(L::offset<"psi">()), psi, 1e-15);
   // Every other element as the wrapped steps give it (the wrap does not change sin / cos).
-  for (int i = 0; i < L::size; ++i)
-    if (i != L::offset<"psi">()) EXPECT_NEAR(got(i), expected(i), 1e-14) << i;
+  for (int i = 0; i < L::size; ++i) {
+    if (i != L::offset<"psi">()) {
+      EXPECT_NEAR(got(i), expected(i), 1e-14) << i;
+    }
+  }
   EXPECT_NEAR(models::wrap_angle(got(4)), expected(4), 1e-14);
 }
 

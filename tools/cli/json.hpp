@@ -10,6 +10,7 @@
 #include <ostream>
 #include <string>
 #include <string_view>
+#include <type_traits>
 #include <utility>
 #include <variant>
 #include <vector>
@@ -75,6 +76,14 @@ class Json {
     return nullptr;
   }
 
+  /// A number, built in place (g++ 12 reports a moved temporary's variant as maybe
+  /// uninitialized, -Wmaybe-uninitialized, a false positive).
+  template <class T>
+    requires(std::is_arithmetic_v<T> && !std::is_same_v<T, bool>)
+  void push_back(T x) {
+    if (!std::holds_alternative<Array>(value_)) value_ = Array{};
+    std::get<Array>(value_).emplace_back(static_cast<double>(x));
+  }
   void push_back(Json v) {
     if (!std::holds_alternative<Array>(value_)) value_ = Array{};
     std::get<Array>(value_).push_back(std::move(v));
