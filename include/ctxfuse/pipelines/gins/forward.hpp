@@ -112,12 +112,20 @@ class ForwardPass {
     if (use != models::InputUse::taken) ++counts_.imu_refused;
     if (use == models::InputUse::lost) return;
     // Time no sample measured: a refused sample's interval, and a sample's beyond imu_hold_s
-    // after its stamp (the next did not come). Past imu_max_unmeasured_s in a row the
-    // strapdown has nothing to go on: the pass is lost and re-aligns (lose, try_align).
-    if (u.t != sample_t_) sample_t_ = u.t, sample_elapsed_ = 0.0;
+    // after its stamp (the next did not come); a new sample taken ends the run. Past
+    // imu_max_unmeasured_s in a row the strapdown has nothing to go on: the pass is lost and
+    // re-aligns (lose, try_align). A slow IMU (10 Hz: half of each interval beyond 50 ms) is
+    // never lost: each new sample ends its run.
+    if (u.t != sample_t_) {
+      sample_t_ = u.t;
+      sample_elapsed_ = 0.0;
+      if (use == models::InputUse::taken) unmeasured_ = 0.0;
+    }
+    const double before = sample_elapsed_;
     sample_elapsed_ += dt;
-    const bool measured = use == models::InputUse::taken && sample_elapsed_ <= s_.imu_hold_s;
-    unmeasured_ = measured ? 0.0 : unmeasured_ + dt;
+    unmeasured_ += use == models::InputUse::taken
+                       ? std::max(0.0, sample_elapsed_ - s_.imu_hold_s) - std::max(0.0, before - s_.imu_hold_s)
+                       : dt;
     if (unmeasured_ > s_.imu_max_unmeasured_s) {
       lose();
       return;
