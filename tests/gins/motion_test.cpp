@@ -80,6 +80,12 @@ TEST(DynamicAlignment, AlignsFromTwoGoodFixesOneSecondAndMoreThanFiveMetresApart
   EXPECT_FALSE(broken.push(fix_at(0.5, false)).has_value());
   EXPECT_FALSE(broken.push(fix_at(1.0, true)).has_value());
   EXPECT_TRUE(broken.push(fix_at(2.0, true)).has_value());
+  // reset() forgets the fixes kept: the fix 1 s after the last one kept no longer aligns.
+  DynamicAlignment again;
+  EXPECT_FALSE(again.push(fix_at(0.0, true)).has_value());
+  again.reset();
+  EXPECT_FALSE(again.push(fix_at(1.0, true)).has_value());
+  EXPECT_TRUE(again.push(fix_at(2.0, true)).has_value());
 }
 
 }  // namespace

@@ -179,8 +179,6 @@ TEST(GinsPipeline, MagnetometerStreamHoldsTheHeadingThroughTheOutage) {
   EXPECT_LT(std::abs(drift_with), 0.9 * std::abs(drift_without));
 }
 
-}  // namespace
-
 // After a fault has led the filter astray beyond what its covariance admits (an accelerometer
 // offset of 0.6 m/s^2 through the 15 s outage: 9 m/s and some 70 m off at its end), the fixes'
 // positions and velocities are both refused by the gate; three in a row of each are released
@@ -265,3 +263,5 @@ TEST(GinsPipeline, ASlowImuIsNeverTakenForAGap) {
   std::printf("outage RMS at 10 Hz %.3f m, at 100 Hz %.3f m\n", e10.rms, e100.rms);
   EXPECT_LT(e10.rms, 2.0 * e100.rms);
 }
+
+}  // namespace

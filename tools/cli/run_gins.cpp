@@ -223,7 +223,9 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
   Json counts;
   for (const auto& [k, v] : {std::pair{"gnss_used", c.gnss_used}, {"gnss_withheld", c.gnss_withheld}, {"gnss_decimated", c.gnss_decimated},
                              {"gnss_gated", c.gnss_gated}, {"gnss_released", c.gnss_released}, {"velocity_used", c.velocity_used},
-                             {"velocity_gated", c.velocity_gated}, {"velocity_released", c.velocity_released}, {"imu_losses", c.imu_losses}, {"realignments", c.realignments}, {"zupt", c.zupt}, {"zupt_gated", c.zupt_gated}, {"zihr", c.zihr},
+                             {"velocity_gated", c.velocity_gated}, {"velocity_released", c.velocity_released},
+                             {"imu_losses", c.imu_losses}, {"realignments", c.realignments}, {"zupt", c.zupt},
+                             {"zupt_gated", c.zupt_gated}, {"zihr", c.zihr},
                              {"zihr_gated", c.zihr_gated}, {"nhc", c.nhc}, {"nhc_gated", c.nhc_gated}, {"mag", c.mag},
                              {"mag_gated", c.mag_gated}, {"static_samples", c.static_samples}, {"imu_refused", c.imu_refused},
                              {"filter_failures", c.filter_failures}})

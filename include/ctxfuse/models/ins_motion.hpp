@@ -139,6 +139,9 @@ class DynamicAlignment {
   double interval_tolerance = 0.1;  // [s]
   double min_distance = 5.0;        // [m]
 
+  /// Forgets the fixes kept (a new alignment from the next two).
+  void reset() { count_ = 0; }
+
   std::optional<NavState> push(const AlignmentFix& fix) {
     if (!fix.good || !std::isfinite(fix.t) || !all_finite(fix.llh) || (count_ > 0 && fix.t <= newest().t)) {
       count_ = 0;

@@ -322,16 +322,14 @@ class ForwardPass {
   /// held sample can stand for a car's motion: the pass stops, keeps what the gap does not
   /// change (biases, mounting, lever arm, roll and pitch) and re-aligns from the next two good
   /// fixes once the IMU is back, as at the start. The RTS records restart there.
+  /// While lost, belief_ is left as it was (nothing predicts or updates it) and is what the
+  /// re-alignment keeps from.
   void lose() {
-    lost_belief_ = belief_;
     aligned_ = false;
     lost_ = true;
     imu_back_ = false;
     unmeasured_ = 0.0;
-    models::DynamicAlignment fresh;
-    fresh.interval = align_.interval;
-    fresh.min_distance = align_.min_distance;
-    align_ = fresh;
+    align_.reset();
     held_heading_.reset();
     mag_ = models::MagRelativeHeading{};  // its reference attitude is the lost one
     gated_in_row_ = velocity_gated_in_row_ = 0;
@@ -342,16 +340,17 @@ class ForwardPass {
     const bool good = fix.quality == io::FixQuality::fixed || fix.quality == io::FixQuality::floating;
     const auto x = align_.push({fix.t, z, good && cov.allFinite()});
     if (!x) return;
-    belief_ = initial_belief<Model>(s_, *x, fix, z, cov, gnss_.lever_arm, nhc_.vehicle.lever_arm, start_,
-                                    lost_ ? &lost_belief_ : nullptr);
+    const B b = initial_belief<Model>(s_, *x, fix, z, cov, gnss_.lever_arm, nhc_.vehicle.lever_arm, start_,
+                                      lost_ ? &belief_ : nullptr);
     if (lost_) {
-      if (!rts_.restart(fix.t, belief_).accepted()) return;
+      if (!rts_.restart(fix.t, b).accepted()) return;
       used_.push_back(1);
       ++counts_.realignments;
     } else {
-      rts_.start(fix.t, belief_);
+      rts_.start(fix.t, b);
       used_.assign(1, 1);
     }
+    belief_ = b;
     lost_ = false;
     aligned_ = true;
     align_t_ = fix.t;
@@ -391,10 +390,9 @@ class ForwardPass {
   int since_progress_ = 0;
   int gated_in_row_ = 0, velocity_gated_in_row_ = 0;
   // IMU gaps (propagate, lose): the sample in force, how long it has been, the unmeasured time
-  // in a row; the belief when the pass was lost.
+  // in a row.
   double sample_t_ = NAN, sample_elapsed_ = 0.0, unmeasured_ = 0.0;
   bool lost_ = false, imu_back_ = false;
-  B lost_belief_{};
 };
 
 }  // namespace ctxfuse::pipelines::gins
