@@ -1,6 +1,7 @@
 // The smoother's step time over a 10-minute replay (issue 16: "flat over a 10-minute replay"):
 // tests/factors/uwb_replay.hpp's 6000 epochs (4 ranges, every 7th left out) through the
-// pipeline's fixed-lag smoother (pipelines/nlos_uwb/smoother.hpp: K = 10, gate, 16 slots).
+// pipeline's fixed-lag smoother (pipelines/nlos_uwb/smoother.hpp: K = 10, gate, 16 slots),
+// and through the pipeline's EKFs.
 // One iteration is the whole replay from a fresh start; the counters are the mean step time of
 // each minute (this thread's CPU clock around the minute's 600 steps, summed over iterations:
 // the shared machine's load inflates wall time) and the ratio of the last minute's to the
@@ -15,6 +16,7 @@
 #include <memory>
 #include <string>
 
+#include "ctxfuse/pipelines/nlos_uwb/calibrated_ekf.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/imu_ekf.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/imu_smoother.hpp"
 #include "uwb_replay.hpp"
@@ -29,21 +31,32 @@ double thread_cpu_s() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
+// The replay's ranges are raw (one sample per report), which the self-calibrating EKF is told.
+nu::Settings replay_settings() {
+  nu::Settings s;
+  s.range_average_samples = 1;
+  return s;
+}
+
+template <class Estimator>
 void FixedLag_Replay10min(benchmark::State& state) {
   const test::UwbReplay replay(10);
   constexpr int kMinutes = 10;
   std::array<double, kMinutes> minute_s{};
-  auto s = std::make_unique<nu::RangeSmoother<>>(nu::Settings{});
+  auto s = std::make_unique<Estimator>(replay_settings());
   int refused = 0;
   for (auto _ : state) {
     state.PauseTiming();
-    *s = nu::RangeSmoother<>(nu::Settings{});
+    *s = Estimator(replay_settings());
     (void)s->start(0.0, replay.start_position(), replay.start_cov());
     state.ResumeTiming();
     for (int m = 0; m < kMinutes; ++m) {
       const double t0 = thread_cpu_s();
-      for (int i = 0; i < test::UwbReplay::epochs_per_minute; ++i)
+      for (int i = 0; i < test::UwbReplay::epochs_per_minute; ++i) {
         refused += !replay.step(*s, static_cast<std::size_t>(m * test::UwbReplay::epochs_per_minute + i));
+        // A fixed-lag output is asked for every epoch, as the run loop does.
+        if constexpr (requires { s->output_position(); }) benchmark::DoNotOptimize(s->output_position().data());
+      }
       minute_s[static_cast<std::size_t>(m)] += thread_cpu_s() - t0;
     }
     benchmark::DoNotOptimize(s->position().data());
@@ -95,7 +108,14 @@ void FixedLag_ImuReplay10min(benchmark::State& state) {
   state.counters["steps_per_replay"] = static_cast<double>(replay.epochs.size() - first);
 }
 
-BENCHMARK(FixedLag_Replay10min)->Name("FixedLag/Replay10min")->Unit(benchmark::kMillisecond);
+BENCHMARK(FixedLag_Replay10min<nu::RangeSmoother<>>)->Name("FixedLag/Replay10min")->Unit(benchmark::kMillisecond);
+// The constant-velocity EKFs of the same fusion: plain (estimators.hpp), self-calibrating
+// (calibrated_ekf.hpp: 8 anchor-bias slots), and the latter with its 0.9 s fixed-lag output.
+BENCHMARK(FixedLag_Replay10min<nu::RangeEkf<>>)->Name("FixedLag/EkfReplay10min")->Unit(benchmark::kMillisecond);
+BENCHMARK(FixedLag_Replay10min<nu::CalibratedRangeEkf<>>)->Name("FixedLag/CalibratedEkfReplay10min")->Unit(benchmark::kMillisecond);
+BENCHMARK(FixedLag_Replay10min<nu::CalibratedRangeEkf<ChiSquareGate, true>>)
+    ->Name("FixedLag/CalibratedEkfLagReplay10min")
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(FixedLag_ImuReplay10min<nu::ImuRangeSmoother<>>)->Name("FixedLag/ImuReplay10min")->Unit(benchmark::kMillisecond);
 BENCHMARK(FixedLag_ImuReplay10min<nu::ImuRangeEkf<>>)->Name("FixedLag/ImuEkfReplay10min")->Unit(benchmark::kMillisecond);
 

@@ -32,19 +32,22 @@ ctxfuse::test::CliRun run(const std::string& args) { return ctxfuse::test::run_c
 TEST(CliRunUwb, TrajectoryAndMetricsOfOneCase) {
   CTXFUSE_REQUIRE_DATA(dir, "uwb-outdoor-hanyang/Dynamic_measurements/NLOS/Trajectory_A/Case_1");
   const fs::path tmp = ctxfuse::test::scratch_dir("run_uwb");
-  const auto r = run("run uwb --data \"" + dir.string() + "\" --out \"" + (tmp / "traj.csv").string() + "\" --json \"" +
-                     (tmp / "metrics.json").string() + "\"");
+  // The fixed-lag output: its rows carry the times of the smoothed states, 0.9 s behind.
+  const auto r = run("run uwb --data \"" + dir.string() + "\" --estimator calibrated-lag --out \"" + (tmp / "traj.csv").string() +
+                     "\" --json \"" + (tmp / "metrics.json").string() + "\"");
   ASSERT_EQ(r.code, 0) << r.err;
-  EXPECT_NE(r.out.find("ekf_gate_per_range"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("calibrated_ekf_gate_per_range_lag"), std::string::npos) << r.out;
 
   std::ifstream js(tmp / "metrics.json");
   const nlohmann::json doc = nlohmann::json::parse(js);
-  EXPECT_EQ(doc.at("trajectory_variant"), "ekf_gate_per_range");
+  EXPECT_EQ(doc.at("trajectory_variant"), "calibrated_ekf_gate_per_range_lag");
   ASSERT_EQ(doc.at("training_cases").size(), 3u);
   for (const auto& c : doc.at("training_cases")) EXPECT_NE(fs::weakly_canonical(c.get<std::string>()), fs::weakly_canonical(dir));
   const double authors_ls = doc.at("authors_rmse_2d_m").at("LS"), authors_eskf = doc.at("authors_rmse_2d_m").at("ESKF");
-  const double ours = doc.at("rmse_2d_m").at("ekf_gate_per_range");
+  const double ours = doc.at("rmse_2d_m").at("calibrated_ekf_gate_per_range_lag");
   EXPECT_LT(ours, std::min(authors_ls, authors_eskf));
+  EXPECT_LE(ours, 0.6);  // issue 16's target on this case
+  EXPECT_LT(doc.at("rmse_2d_m").at("calibrated_ekf_gate_per_range").get<double>(), doc.at("rmse_2d_m").at("ekf_gate_per_range").get<double>());
   EXPECT_GT(doc.at("identification").at("ds").at("accuracy").get<double>(), 0.5);
 
   // The CSV: header, one row per estimate, and the same score when read back.
@@ -76,6 +79,9 @@ TEST(CliRunUwb, UsageAndInputErrors) {
   const auto bad_policy = run("run uwb --data \"" + empty.string() + "\" --policy sometimes");
   EXPECT_EQ(bad_policy.code, 2);
   EXPECT_NE(bad_policy.err.find("--policy"), std::string::npos) << bad_policy.err;
+  const auto bad_estimator = run("run uwb --data \"" + empty.string() + "\" --estimator kalman");
+  EXPECT_EQ(bad_estimator.code, 2);
+  EXPECT_NE(bad_estimator.err.find("--estimator"), std::string::npos) << bad_estimator.err;
   const auto no_ranges = run("run uwb --data \"" + empty.string() + "\"");
   EXPECT_EQ(no_ranges.code, 1);
   EXPECT_NE(no_ranges.err.find("A<id>.csv"), std::string::npos) << no_ranges.err;
@@ -97,7 +103,7 @@ TEST(CliRunUwb, PlotsAgreeWithTheMetrics) {
   std::ifstream js(tmp / "m.json");
   const nlohmann::json doc = nlohmann::json::parse(js);
   const std::string v = doc.at("trajectory_variant");
-  ASSERT_EQ(v, "ekf_gate_paper_rule");
+  ASSERT_EQ(v, "calibrated_ekf_gate_paper_rule");  // the default estimator
 
   // Plan view: every estimate, the left-out epochs on their own; one point per anchor file.
   const auto traj = t::expect_plot(plots, "uwb_trajectory");

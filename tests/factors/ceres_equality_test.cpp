@@ -6,6 +6,7 @@
 #include "ceres_factors.hpp"
 #include "ctxfuse/filters/factors.hpp"
 #include "ctxfuse/filters/fixed_lag.hpp"
+#include "ctxfuse/models/averaged_range.hpp"
 #include "ctxfuse/models/linear.hpp"
 #include "straight_turn.hpp"
 
@@ -93,6 +94,19 @@ TEST(CeresEquality, AutoDiffJacobiansEqualAnalyticOnes) {
     MotionFactor<models::LinearProcess<6, 2>> lpf;
     ASSERT_TRUE(make_motion_factor(lp, Vector<2>(0.3, -0.2), 0.1, state(k), lpf));
     EXPECT_LT(binary_gap(lpf, state(k), state(k + 1)), 1e-9) << "linear process " << k;
+
+    using PVB = Layout<Block<"p", 2>, Block<"v", 2>, Block<"b", 3>>;
+    models::AveragedRangeWithBias<PVB> avg;
+    avg.anchor = {2.5, -0.87, 1.97};
+    avg.tag_height = 1.0;
+    avg.samples = 3;
+    avg.period_s = 0.1;
+    avg.bias_slot = k % 3;
+    Vector<7> xb;
+    xb << state(k).head<4>(), 0.05, -0.02, 0.1 * k;
+    MeasurementFactor<7, models::AveragedRangeWithBias<PVB>> avf;
+    ASSERT_TRUE(make_measurement_factor<7>(avg, Vector<1>(6.0), xb, avf));
+    EXPECT_LT(unary_gap(avf, xb), 1e-9) << "averaged range with bias " << k;
 
     models::AccelerationDriven<PV3, 3> imu;
     imu.accel_psd = 0.05;

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <memory>
 
+#include "ctxfuse/pipelines/nlos_uwb/calibrated_ekf.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/imu_ekf.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/imu_smoother.hpp"
 #include "uwb_replay.hpp"
@@ -34,6 +35,38 @@ TEST(UwbReplayAllocation, TenMinutesThroughTheSmootherNeverAllocate) {
   EXPECT_EQ(s->smoother().window().size, 10);
   EXPECT_DOUBLE_EQ(s->time(), 600.0);
   EXPECT_LT(worst, 0.5);  // 5 range sigmas: the estimate never leaves the circle
+}
+
+// The self-calibrating EKF with its fixed-lag output (the ring of update records wraps every
+// few seconds) over the same replay, whose ranges are raw (one sample per report); the lagged
+// output is asked for every epoch, as the run loop does.
+TEST(UwbReplayAllocation, TenMinutesThroughTheCalibratedEkfAndItsLaggedOutputNeverAllocate) {
+  const test::UwbReplay replay(10);
+  nu::Settings settings;
+  settings.range_average_samples = 1;
+  auto s = std::make_unique<nu::CalibratedRangeEkf<ChiSquareGate, true>>(settings);
+  ASSERT_TRUE(s->start(0.0, replay.start_position(), replay.start_cov()).accepted());
+  int refused = 0;
+  double worst = 0.0, worst_lagged = 0.0, lag_min = 1e9, lag_max = 0.0;
+  const long uses = test::heap_uses([&] {
+    for (std::size_t k = 0; k < replay.epochs.size(); ++k) {
+      refused += !replay.step(*s, k);
+      worst = std::max(worst, std::abs(s->position().norm() - test::UwbReplay::radius));
+      worst_lagged = std::max(worst_lagged, std::abs(s->output_position().norm() - test::UwbReplay::radius));
+      if (k > 20) {
+        lag_min = std::min(lag_min, s->time() - s->output_time());
+        lag_max = std::max(lag_max, s->time() - s->output_time());
+      }
+    }
+  });
+  EXPECT_EQ(uses, 0);
+  EXPECT_EQ(refused, 0);
+  EXPECT_DOUBLE_EQ(s->time(), 600.0);
+  EXPECT_LT(worst, 0.5);
+  EXPECT_LT(worst_lagged, 0.5);
+  // One record per epoch here (the replay's four ranges share a stamp): exactly the lag back.
+  EXPECT_NEAR(lag_min, settings.smoothed_output_lag_s, 1e-6);
+  EXPECT_NEAR(lag_max, settings.smoothed_output_lag_s, 1e-6);
 }
 
 // The replay through an estimator that takes the IMU: the circle's IMU (yaw rate v / r,

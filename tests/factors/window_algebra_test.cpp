@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -13,6 +14,7 @@
 #include "ctxfuse/core/block_tridiagonal.hpp"
 #include "ctxfuse/filters/ekf.hpp"
 #include "ctxfuse/filters/factors.hpp"
+#include "ctxfuse/models/averaged_range.hpp"
 #include "ctxfuse/models/kinematic.hpp"
 #include "ctxfuse/models/linear.hpp"
 
@@ -254,6 +256,29 @@ TEST(WindowAlgebra, SpdInverseEqualsEigenAndRefusesWhatIsNotPositiveDefinite) {
   expect_spd_inverse_matches_eigen<6>();
 }
 
+/// One EKF update of `belief` with `model` against one Gauss-Newton step on the prior factor
+/// and the measurement factor of the same model, solved by the window's block Cholesky.
+template <int Dim, class Model>
+void expect_ekf_update_is_one_gauss_newton_step(const Model& model, Gaussian<Dim> belief, const Vector<1>& z, int trial) {
+  PriorFactor<Dim> prior;
+  MeasurementFactor<Dim, Model> meas;
+  ASSERT_TRUE(make_prior_factor(belief, prior));
+  ASSERT_TRUE(make_measurement_factor<Dim>(model, z, belief.mean, meas));
+  BlockTridiagonal<Dim, 1> sys;
+  sys.reset(1);
+  ASSERT_TRUE(sys.add(prior, 0, belief.mean));
+  ASSERT_TRUE(sys.add(meas, 0, belief.mean));
+  BlockTridiagonalCholesky<Dim, 1> chol;
+  ASSERT_EQ(chol.factorize(sys), Problem::none);
+  std::array<Vector<Dim>, 1> b{-sys.gradient[0]}, dx;
+  chol.solve(b, dx);
+
+  ASSERT_TRUE(ekf::update<Dim>(model, belief, z));
+  EXPECT_LT(((belief.mean - prior.mean) - dx[0]).cwiseAbs().maxCoeff(), 1e-12) << trial;
+  EXPECT_LT((belief.cov - chol.last_covariance()).cwiseAbs().maxCoeff(), 1e-12) << trial;
+  EXPECT_GT(dx[0].norm(), 1e-2);  // the update moved the state: the equality is not 0 = 0
+}
+
 TEST(WindowAlgebra, EkfUpdateEqualsOneGaussNewtonStep) {
   Range range;
   range.anchor = {12.0, -4.0, 3.0};
@@ -263,25 +288,27 @@ TEST(WindowAlgebra, EkfUpdateEqualsOneGaussNewtonStep) {
     belief.mean << 1.0 + trial, 2.0, 0.5, 1.5, -0.5, 0.0;
     SquareMatrix<N> B = SquareMatrix<N>::Random();
     belief.cov = 0.1 * B * B.transpose() + 0.2 * SquareMatrix<N>::Identity();
-    const Vector<1> z(13.0 + trial);
+    expect_ekf_update_is_one_gauss_newton_step<N>(range, belief, Vector<1>(13.0 + trial), trial);
+  }
+}
 
-    PriorFactor<N> prior;
-    MeasurementFactor<N, Range> meas;
-    ASSERT_TRUE(make_prior_factor(belief, prior));
-    ASSERT_TRUE(make_measurement_factor<N>(range, z, belief.mean, meas));
-    BlockTridiagonal<N, 1> sys;
-    sys.reset(1);
-    ASSERT_TRUE(sys.add(prior, 0, belief.mean));
-    ASSERT_TRUE(sys.add(meas, 0, belief.mean));
-    BlockTridiagonalCholesky<N, 1> chol;
-    ASSERT_EQ(chol.factorize(sys), Problem::none);
-    std::array<Vector<N>, 1> b{-sys.gradient[0]}, dx;
-    chol.solve(b, dx);
-
-    ASSERT_TRUE(ekf::update<N>(range, belief, z));
-    EXPECT_LT(((belief.mean - prior.mean) - dx[0]).cwiseAbs().maxCoeff(), 1e-12) << trial;
-    EXPECT_LT((belief.cov - chol.last_covariance()).cwiseAbs().maxCoeff(), 1e-12) << trial;
-    EXPECT_GT(dx[0].norm(), 1e-2);  // the update moved the state: the equality is not 0 = 0
+// The same for the averaged, biased range of the self-calibrating UWB EKF (7 states: p, v and
+// three anchor biases), whose row touches position, velocity and one bias.
+TEST(WindowAlgebra, EkfUpdateEqualsOneGaussNewtonStepForTheAveragedBiasedRange) {
+  using PVB = Layout<Block<"p", 2>, Block<"v", 2>, Block<"b", 3>>;
+  models::AveragedRangeWithBias<PVB> avg;
+  avg.anchor = {2.5775, 0.87, 1.97};
+  avg.tag_height = 1.0;
+  avg.samples = 3;
+  avg.period_s = 0.1;
+  avg.sigma = 0.1;
+  for (int trial = 0; trial < 3; ++trial) {
+    avg.bias_slot = trial;
+    Gaussian<7> belief;
+    belief.mean << 20.0 + trial, -3.0, 0.8, -0.2, 0.05, -0.02, 0.01;
+    SquareMatrix<7> B = SquareMatrix<7>::Random();
+    belief.cov = 0.1 * B * B.transpose() + 0.05 * SquareMatrix<7>::Identity();
+    expect_ekf_update_is_one_gauss_newton_step<7>(avg, belief, Vector<1>(19.0 + trial), trial);
   }
 }
 

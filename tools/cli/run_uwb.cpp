@@ -1,11 +1,12 @@
-// `ctxfuse run uwb --data CASE_DIR [--out traj.csv] [--json metrics.json] [--policy P]
-// [--train DIR,...]`: the NLOS-robust UWB pipeline of paper C (ctxfuse/pipelines/nlos_uwb) on
-// one Hanyang dynamic case (A<id>.csv ranges; trajectory.csv, the reference, to score), every
-// variant and baseline scored with the dataset authors' protocol (eval/hanyang_protocol.hpp)
-// beside their RMSD_results.txt. The SVM of p1 is trained on --train, by default on the other
-// cases of the same dataset (never on CASE_DIR). --out writes the chosen variant's trajectory:
-// time_ns,x,y,z, one row per estimate (z is the tag's fixed height). Parsing and formatting
-// only: the runs and scores are eval::evaluate_nlos_uwb_case.
+// `ctxfuse run uwb --data CASE_DIR [--out traj.csv] [--json metrics.json] [--estimator E]
+// [--policy P] [--train DIR,...]`: the NLOS-robust UWB pipeline of paper C
+// (ctxfuse/pipelines/nlos_uwb) on one Hanyang dynamic case (A<id>.csv ranges; trajectory.csv,
+// the reference, to score), every variant and baseline scored with the dataset authors'
+// protocol (eval/hanyang_protocol.hpp) beside their RMSD_results.txt. The SVM of p1 is trained
+// on --train, by default on the other cases of the same dataset (never on CASE_DIR). --out
+// writes the trajectory of the variant --estimator and --policy choose: time_ns,x,y,z, one row
+// per estimate (z is the tag's fixed height). Parsing and formatting only: the runs and scores
+// are eval::evaluate_nlos_uwb_case.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -28,12 +29,18 @@ namespace ctxfuse::cli {
 namespace {
 
 struct UwbOptions {
+  std::string estimator = "calibrated";
   std::string policy = "per-range";
   std::vector<std::string> train;
 };
 
 std::shared_ptr<void> add_options(CLI::App& app) {
   auto o = std::make_shared<UwbOptions>();
+  app.add_option("--estimator", o->estimator,
+                 "estimator of the trajectory written by --out: calibrated (the self-calibrating EKF, newest state), "
+                 "calibrated-lag (its fixed-lag output, 0.9 s behind), ekf (the plain EKF)")
+      ->check(CLI::IsMember({"calibrated", "calibrated-lag", "ekf"}))
+      ->capture_default_str();
   app.add_option("--policy", o->policy, "NLOS policy of the trajectory written by --out: paper (epoch rule), per-range, none")
       ->check(CLI::IsMember({"paper", "per-range", "none"}))
       ->capture_default_str();
@@ -132,13 +139,14 @@ int run_uwb(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::os
     err << "ctxfuse run uwb: " << e.what() << '\n';
     return 1;
   }
-  const std::string chosen = o.policy == "paper" ? "ekf_gate_paper_rule" : o.policy == "none" ? "ekf_gate" : "ekf_gate_per_range";
+  const std::string rule = o.policy == "paper" ? "_paper_rule" : o.policy == "none" ? "" : "_per_range";
+  const std::string chosen = (o.estimator == "ekf" ? "ekf_gate" : "calibrated_ekf_gate") + rule + (o.estimator == "calibrated-lag" ? "_lag" : "");
   std::ostream& out = in.out;
   out << "uwb on " << in.data_dir.string() << ": SVM " << (rep.svm ? "trained on " + std::to_string(train.size()) + " other cases" : "none (R = p2)")
       << "\n2-D RMSE, authors' protocol (m):\n";
   Json doc, rmse, epochs;
   for (const auto& v : rep.variants) {
-    out << formatted("  %-30s %7.3f  (%zu estimates scored, %zu epochs left out)\n", v.name.c_str(), v.rmse.rmse_2d, v.rmse.scored,
+    out << formatted("  %-36s %7.3f  (%zu estimates scored, %zu epochs left out)\n", v.name.c_str(), v.rmse.rmse_2d, v.rmse.scored,
                      v.track.epochs_left_out);
     rmse[v.name] = v.rmse.rmse_2d;
     epochs[v.name] = static_cast<double>(v.track.epochs_left_out);
@@ -146,7 +154,7 @@ int run_uwb(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::os
   Json authors;
   for (const char* who : {"LS", "ESKF"})
     if (const auto it = rep.authors.find(std::string(who) + " RMSE_2d"); it != rep.authors.end()) {
-      out << formatted("  authors %-22s %7.3f\n", who, it->second);
+      out << formatted("  authors %-28s %7.3f\n", who, it->second);
       authors[who] = it->second;
     }
   out << "NLOS identification against residual labels (paper rule run): precision / recall / accuracy\n";

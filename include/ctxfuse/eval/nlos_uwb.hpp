@@ -24,6 +24,7 @@
 #include "ctxfuse/eval/classification.hpp"
 #include "ctxfuse/eval/hanyang_protocol.hpp"
 #include "ctxfuse/io/hanyang_uwb.hpp"
+#include "ctxfuse/pipelines/nlos_uwb/calibrated_ekf.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/run.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/smoother.hpp"
 
@@ -165,10 +166,18 @@ struct NlosUwbCaseReport {
   }
 };
 
-inline constexpr std::array<std::string_view, 11> kNlosUwbVariants{
+inline constexpr std::array<std::string_view, 17> kNlosUwbVariants{
     "ekf_gate_paper_rule",  // the paper's pipeline: EKF + innovation gate + the epoch attach rule
     "ekf_gate_per_range",   // the per-range extension
     "ekf_gate",             // innovation gate only, no NLOS classification in the loop
+    // The self-calibrating EKF (pipelines/nlos_uwb/calibrated_ekf.hpp: anchor biases, the
+    // averaged report's time), newest state, and its fixed-lag output (smoothed_output_lag_s).
+    "calibrated_ekf_gate_paper_rule",
+    "calibrated_ekf_gate_per_range",
+    "calibrated_ekf_gate",
+    "calibrated_ekf_gate_paper_rule_lag",
+    "calibrated_ekf_gate_per_range_lag",
+    "calibrated_ekf_gate_lag",
     "smoother_gate_paper_rule",  // the fixed-lag smoother (10 states), newest state
     "smoother_gate",             // the same without the NLOS rule
     "smoother_gate_lag9",        // the same, the state 9 epochs back (0.9 s late)
@@ -207,15 +216,23 @@ inline NlosUwbCaseReport evaluate_nlos_uwb_case(const std::filesystem::path& cas
   add(kNlosUwbVariants[0], nu::run(rs, nu::RangeEkf<>(s), nu::PaperEpochRule{}, classifier, s));
   add(kNlosUwbVariants[1], nu::run(rs, nu::RangeEkf<>(s), nu::PerRangeRule{}, classifier, s));
   add(kNlosUwbVariants[2], nu::run(rs, nu::RangeEkf<>(s), nu::NoNlosHandling{}, classifier, s));
+  using Calibrated = nu::CalibratedRangeEkf<>;
+  using CalibratedLag = nu::CalibratedRangeEkf<ChiSquareGate, true>;
+  add(kNlosUwbVariants[3], nu::run(rs, Calibrated(s), nu::PaperEpochRule{}, classifier, s));
+  add(kNlosUwbVariants[4], nu::run(rs, Calibrated(s), nu::PerRangeRule{}, classifier, s));
+  add(kNlosUwbVariants[5], nu::run(rs, Calibrated(s), nu::NoNlosHandling{}, classifier, s));
+  add(kNlosUwbVariants[6], nu::run(rs, CalibratedLag(s), nu::PaperEpochRule{}, classifier, s));
+  add(kNlosUwbVariants[7], nu::run(rs, CalibratedLag(s), nu::PerRangeRule{}, classifier, s));
+  add(kNlosUwbVariants[8], nu::run(rs, CalibratedLag(s), nu::NoNlosHandling{}, classifier, s));
   using Lagged = nu::RangeSmoother<10, ChiSquareGate, 9>;
-  add(kNlosUwbVariants[3], nu::run(rs, nu::RangeSmoother<>(s), nu::PaperEpochRule{}, classifier, s));
-  add(kNlosUwbVariants[4], nu::run(rs, nu::RangeSmoother<>(s), nu::NoNlosHandling{}, classifier, s));
-  add(kNlosUwbVariants[5], nu::run(rs, Lagged(s), nu::NoNlosHandling{}, classifier, s));
-  add(kNlosUwbVariants[6], nu::run(rs, Lagged(s), nu::PaperEpochRule{}, classifier, s));
-  add(kNlosUwbVariants[7], nu::run(rs, nu::RangeEkf<NoGate>(s), nu::PaperEpochRule{}, classifier, s));
-  add(kNlosUwbVariants[8], nu::run(rs, nu::RangeEkf<NoGate>(s), nu::NoNlosHandling{}, classifier, s));
-  add(kNlosUwbVariants[9], nu::least_squares_track(rs, s));
-  add(kNlosUwbVariants[10], nu::run(rs, nu::MotionModelOnly(s), nu::NoNlosHandling{}, classifier, s));
+  add(kNlosUwbVariants[9], nu::run(rs, nu::RangeSmoother<>(s), nu::PaperEpochRule{}, classifier, s));
+  add(kNlosUwbVariants[10], nu::run(rs, nu::RangeSmoother<>(s), nu::NoNlosHandling{}, classifier, s));
+  add(kNlosUwbVariants[11], nu::run(rs, Lagged(s), nu::NoNlosHandling{}, classifier, s));
+  add(kNlosUwbVariants[12], nu::run(rs, Lagged(s), nu::PaperEpochRule{}, classifier, s));
+  add(kNlosUwbVariants[13], nu::run(rs, nu::RangeEkf<NoGate>(s), nu::PaperEpochRule{}, classifier, s));
+  add(kNlosUwbVariants[14], nu::run(rs, nu::RangeEkf<NoGate>(s), nu::NoNlosHandling{}, classifier, s));
+  add(kNlosUwbVariants[15], nu::least_squares_track(rs, s));
+  add(kNlosUwbVariants[16], nu::run(rs, nu::MotionModelOnly(s), nu::NoNlosHandling{}, classifier, s));
   rep.identification = identification(rep.variants.front().track, ref, s);
   if (fs::exists(case_dir / "RMSD_results.txt")) rep.authors = read_hanyang_rmsd(case_dir / "RMSD_results.txt");
   return rep;

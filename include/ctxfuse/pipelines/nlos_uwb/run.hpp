@@ -200,12 +200,18 @@ class EpochProcessor {
 
  private:
   /// The epoch's estimate, counted as attached (a range or the start fix used) or left out.
+  /// A fixed-lag estimator's output is emitted once per state: not again while its window is
+  /// shorter than the lag (after a start) or has not moved on. Its `attached` flag is the
+  /// newest epoch's, not the lagged state's.
   void emit(bool attached) {
     (attached ? track_.epochs_attached : track_.epochs_left_out) += 1;
-    if constexpr (requires(const Estimator& e) { e.output_time(); e.output_position(); })
-      track_.estimates.push_back({est_.output_time(), est_.output_position(), attached});  // a fixed-lag estimate
-    else
+    if constexpr (requires(const Estimator& e) { e.output_time(); e.output_position(); }) {
+      const double t = est_.output_time();
+      if (track_.estimates.empty() || t > track_.estimates.back().t)
+        track_.estimates.push_back({t, est_.output_position(), attached});  // a fixed-lag estimate
+    } else {
       track_.estimates.push_back({est_.time(), est_.position(), attached});
+    }
   }
 
   using SourceHealth = policies::SourceHealth;

@@ -22,6 +22,25 @@ struct Settings {
   // (data sheet, 6.8 Mb/s mode, outdoors), so a larger value is a corrupt record.
   double max_range_m = 300.0;
 
+  // --- What a reported range is (the self-calibrating EKF, calibrated_ekf.hpp) ---------------
+  // Each anchor's range carries a bias of its own that stays over a run (antenna delay left
+  // over from calibration): the static LOS set's per-file mean error varies by 8.6 cm (see
+  // range_sigma_m), the data sheet says +-10 cm. The self-calibrating EKF estimates one bias
+  // per anchor, a random constant with this prior sigma.
+  double anchor_bias_sigma_m = 0.10;
+  // The Hanyang system reports, every 100 ms, the mean of an anchor's last 3 raw ranges: on the
+  // static start of every dynamic recording the first differences of the ranges have
+  // autocorrelation about -0.5 at lag 3 and about 0 at lags 1 and 2, the signature of a
+  // 3-sample moving average (differences of white noise give -0.5 at lag 1); printed and checked
+  // by tests/pipelines/pipelines_nlos_uwb_real_data_test. Such a report lags the range now by
+  // (n - 1) / 2 periods (0.1 s) under constant velocity; the self-calibrating EKF models it as
+  // the mean it is (models/averaged_range.hpp). 1: a system that reports each raw range.
+  int range_average_samples = 3;
+  double range_period_s = 0.1;
+  // The fixed-lag output of the self-calibrating EKF: the RTS-smoothed state this far behind
+  // the newest range, the fixed-lag smoother's window (10 states at 10 Hz: 0.9 s).
+  double smoothed_output_lag_s = 0.9;
+
   // --- Tag geometry ------------------------------------------------------------------------
   // The tag rides a known height above the reference frame's ground: the dataset authors'
   // evaluation compares the estimate's z with the reference z + 1 m (data README), i.e. the
@@ -84,6 +103,10 @@ struct Settings {
     if (!positive(max_range_m)) return "max_range_m must be finite and > 0";
     if (!std::isfinite(tag_height_m)) return "tag_height_m must be finite";
     if (!positive(epoch_window_s)) return "epoch_window_s must be finite and > 0";
+    if (!(std::isfinite(anchor_bias_sigma_m) && anchor_bias_sigma_m >= 0.0)) return "anchor_bias_sigma_m must be finite and >= 0";
+    if (range_average_samples < 1 || range_average_samples > 100) return "range_average_samples must be in 1..100";
+    if (!positive(range_period_s)) return "range_period_s must be finite and > 0";
+    if (!(std::isfinite(smoothed_output_lag_s) && smoothed_output_lag_s >= 0.0)) return "smoothed_output_lag_s must be finite and >= 0";
     if (!positive(accel_psd)) return "accel_psd must be finite and > 0";
     if (!positive(initial_speed_sigma_mps)) return "initial_speed_sigma_mps must be finite and > 0";
     if (!positive(max_speed_mps)) return "max_speed_mps must be finite and > 0";
