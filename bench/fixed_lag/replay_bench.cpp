@@ -31,23 +31,16 @@ double thread_cpu_s() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
-// The replay's ranges are raw (one sample per report), which the self-calibrating EKF is told.
-nu::Settings replay_settings() {
-  nu::Settings s;
-  s.range_average_samples = 1;
-  return s;
-}
-
 template <class Estimator>
 void FixedLag_Replay10min(benchmark::State& state) {
   const test::UwbReplay replay(10);
   constexpr int kMinutes = 10;
   std::array<double, kMinutes> minute_s{};
-  auto s = std::make_unique<Estimator>(replay_settings());
+  auto s = std::make_unique<Estimator>(test::UwbReplay::settings());
   int refused = 0;
   for (auto _ : state) {
     state.PauseTiming();
-    *s = Estimator(replay_settings());
+    *s = Estimator(test::UwbReplay::settings());
     (void)s->start(0.0, replay.start_position(), replay.start_cov());
     state.ResumeTiming();
     for (int m = 0; m < kMinutes; ++m) {

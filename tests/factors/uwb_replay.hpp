@@ -43,6 +43,13 @@ struct UwbReplay {
       }
     }
   }
+  /// The pipeline's settings for this replay: its ranges are raw, one sample per report (what
+  /// the self-calibrating EKF is told; the other estimators do not read it).
+  static pipelines::nlos_uwb::Settings settings() {
+    pipelines::nlos_uwb::Settings s;
+    s.range_average_samples = 1;
+    return s;
+  }
   /// The start: the true position at t = 0 with 0.3 m sigma, velocity unknown (settings).
   Eigen::Vector2d start_position() const { return {radius, 0.0}; }
   Eigen::Matrix2d start_cov() const { return Eigen::Matrix2d::Identity() * 0.09; }

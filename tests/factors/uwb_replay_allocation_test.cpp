@@ -42,8 +42,7 @@ TEST(UwbReplayAllocation, TenMinutesThroughTheSmootherNeverAllocate) {
 // output is asked for every epoch, as the run loop does.
 TEST(UwbReplayAllocation, TenMinutesThroughTheCalibratedEkfAndItsLaggedOutputNeverAllocate) {
   const test::UwbReplay replay(10);
-  nu::Settings settings;
-  settings.range_average_samples = 1;
+  const nu::Settings settings = test::UwbReplay::settings();
   auto s = std::make_unique<nu::CalibratedRangeEkf<ChiSquareGate, true>>(settings);
   ASSERT_TRUE(s->start(0.0, replay.start_position(), replay.start_cov()).accepted());
   int refused = 0;
