@@ -46,6 +46,7 @@ class FixedLagRts {
   /// Forgets every record and starts from `posterior` at t (a new run: nothing before it is
   /// linked to what follows).
   void start(double t, const Gaussian<N>& posterior) {
+    ++revision_;
     size_ = 0;
     head_ = 0;
     push(t, posterior.mean, posterior.mean);
@@ -55,6 +56,9 @@ class FixedLagRts {
 
   bool started() const { return size_ > 0; }
   int size() const { return size_; }
+  /// Changes whenever the window does (a start, an accepted record): a cache of smoothed()
+  /// is current while it stays.
+  std::size_t revision() const { return revision_; }
 
   /// One prediction's Jacobian, composed into the transition since the newest record.
   void predicted(const SquareMatrix<N>& F) { phi_ = (F * phi_).eval(); }
@@ -69,6 +73,7 @@ class FixedLagRts {
     Record& last = at(size_ - 1);
     if (!(t >= last.t)) return Status::invalid(Problem::out_of_order_time);
     if (t == last.t && phi_.isIdentity(0.0)) {
+      ++revision_;
       last.mean = posterior.mean;
       last_cov_ = posterior.cov;
       return Status{};
@@ -88,6 +93,7 @@ class FixedLagRts {
       start(t, posterior);
       return Status::failure(Problem::non_finite_covariance);
     }
+    ++revision_;
     push(t, prior.mean, posterior.mean);
     last_cov_ = posterior.cov;
     phi_.setIdentity();
@@ -137,6 +143,7 @@ class FixedLagRts {
 
   std::array<Record, Capacity> ring_{};
   int head_ = 0, size_ = 0;
+  std::size_t revision_ = 0;
   SquareMatrix<N> last_cov_ = SquareMatrix<N>::Identity();  // the newest record's filtered covariance
   SquareMatrix<N> phi_ = SquareMatrix<N>::Identity();
 };

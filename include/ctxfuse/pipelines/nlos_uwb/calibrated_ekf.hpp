@@ -89,10 +89,7 @@ class CalibratedRangeEkf {
     belief_ = b;
     t_ = t;
     started_ = true;
-    if constexpr (Lagged) {
-      lag_.start(t, belief_);
-      ++lag_records_;
-    }
+    if constexpr (Lagged) lag_.start(t, belief_);
     return Status{};
   }
 
@@ -126,7 +123,6 @@ class CalibratedRangeEkf {
         // does not have; the window would then start again from this posterior, and the
         // filter's update stands either way.
         (void)lag_.record(t_, prior, belief_);
-        ++lag_records_;
       }
       return s;
     } else {
@@ -139,10 +135,7 @@ class CalibratedRangeEkf {
     if constexpr (Lagged) {
       // The epoch's end is a record too (no update there: prior = posterior), so that the
       // lagged output moves on with every epoch, also with every range left out or gated.
-      if (s.accepted()) {
-        (void)lag_.record(t_, belief_, belief_);
-        ++lag_records_;
-      }
+      if (s.accepted()) (void)lag_.record(t_, belief_, belief_);
     }
     return s;
   }
@@ -163,13 +156,14 @@ class CalibratedRangeEkf {
   }
 
  private:
-  // The backward pass runs once per new record, however often the output is asked for.
+  // The backward pass runs once per change of the window, however often the output is asked
+  // for (emit asks for time and position).
   const auto& lagged() const
     requires Lagged
   {
-    if (lagged_records_ != lag_records_) {
+    if (lagged_revision_ != lag_.revision()) {
       lagged_ = lag_.smoothed(settings_.smoothed_output_lag_s);
-      lagged_records_ = lag_records_;
+      lagged_revision_ = lag_.revision();
     }
     return lagged_;
   }
@@ -197,8 +191,7 @@ class CalibratedRangeEkf {
   struct NoLag {};
   using Lag = FixedLagRts<N, LagCapacity>;
   [[no_unique_address]] std::conditional_t<Lagged, Lag, NoLag> lag_{};
-  std::size_t lag_records_ = 0;  // starts and records so far: the cache's key
-  mutable std::size_t lagged_records_ = static_cast<std::size_t>(-1);
+  mutable std::size_t lagged_revision_ = static_cast<std::size_t>(-1);  // lag_'s, when lagged_ was made
   mutable std::conditional_t<Lagged, typename Lag::Smoothed, NoLag> lagged_{};
 };
 
