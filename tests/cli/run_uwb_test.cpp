@@ -1,7 +1,8 @@
 // `ctxfuse run uwb` end to end on one Hanyang case (real data; skipped without it): the
 // trajectory CSV (time_ns,x,y,z, one row per estimate) scored again here with the authors'
 // protocol gives the JSON's figure; the JSON names a leave-one-out split; usage errors; --plot
-// writes its three plots, whose data agree with the JSON.
+// writes its three plots, whose data agree with the JSON. More in run_uwb_any_test.cpp (runs
+// without reference or siblings, spans, `ctxfuse score`, a simulated case).
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>

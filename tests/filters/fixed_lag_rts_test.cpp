@@ -41,8 +41,7 @@ Process cv(double dt) {
 }
 
 /// An EKF run of `epochs` epochs into the fixed-lag smoother and into the list of epochs.
-template <int Capacity>
-std::vector<Epoch> run(int epochs, FixedLagRts<N, Capacity>& lag, std::uint64_t seed) {
+std::vector<Epoch> run(int epochs, FixedLagRts<N>& lag, std::uint64_t seed) {
   sim::Rng rng(seed);
   Gaussian<N> belief;
   belief.mean << 0.0, 1.0, 0.0, 2.0;
@@ -97,7 +96,7 @@ std::vector<Vector<N>> textbook_rts(const std::vector<Epoch>& e, std::size_t las
 }
 
 TEST(FixedLagRts, EqualsTheTextbookRtsOverTheWholeRun) {
-  FixedLagRts<N, 128> lag;
+  FixedLagRts<N> lag(128);
   const auto e = run(60, lag, 11);
   const auto xs = textbook_rts(e, e.size() - 1);
   for (double lag_s : {0.0, 0.3, 1.0, 2.5, 100.0}) {
@@ -116,7 +115,7 @@ TEST(FixedLagRts, EqualsTheTextbookRtsOverTheWholeRun) {
 }
 
 TEST(FixedLagRts, ALongerRunThanTheRingSmoothsWithinTheLagExactly) {
-  FixedLagRts<N, 16> lag;
+  FixedLagRts<N> lag(16);
   const auto e = run(100, lag, 12);
   const auto xs = textbook_rts(e, e.size() - 1);
   const auto s = lag.smoothed(1.0);  // about 8 records back: inside the ring
@@ -132,7 +131,7 @@ TEST(FixedLagRts, ALongerRunThanTheRingSmoothsWithinTheLagExactly) {
 }
 
 TEST(FixedLagRts, RefusedRecordsLeaveTheWindowAsItWas) {
-  FixedLagRts<N, 32> lag;
+  FixedLagRts<N> lag(32);
   Gaussian<N> g;
   EXPECT_EQ(lag.record(1.0, g, g).outcome, Outcome::invalid_input);  // before start
   const auto e = run(10, lag, 13);

@@ -1,5 +1,5 @@
 // The detectors that decide when the INS constraints apply: static detection from raw IMU,
-// the magnetometer's relative heading since a quasi-static-field epoch, dynamic alignment.
+// the magnetometer's relative heading since a quasi-static-field epoch.
 #include <gtest/gtest.h>
 
 #include "ctxfuse/models/ins_motion.hpp"
@@ -51,41 +51,6 @@ TEST(MagRelativeHeading, MeasuresTheHeadingChangeWhateverTheTilt) {
   // A field 10 % stronger (a passing truck, a bridge) ends the reference.
   EXPECT_FALSE(mag.heading(C1, 1.1 * (C1.transpose() * field_ned)).has_value());
   EXPECT_FALSE(mag.active());
-}
-
-TEST(DynamicAlignment, AlignsFromTwoGoodFixesOneSecondAndMoreThanFiveMetresApart) {
-  DynamicAlignment align;
-  const Eigen::Vector3d start(37.4 * kDeg, -122.1 * kDeg, 30.0);
-  const Eigen::Vector3d v_ned(6.0, 8.0, 0.0);  // 10 m/s at heading 53.13 deg
-  auto fix_at = [&](double t, bool good) {
-    return AlignmentFix{t, earth::GeodeticRetraction::inject(start, v_ned * t), good};
-  };
-  // 4 Hz: no alignment before a fix 1 s after an earlier good one.
-  for (int i = 0; i < 4; ++i) EXPECT_FALSE(align.push(fix_at(0.25 * i, true)).has_value());
-  const auto x = align.push(fix_at(1.0, true));
-  ASSERT_TRUE(x.has_value());
-  EXPECT_NEAR(heading_of(x->get<"theta">().toRotationMatrix()), std::atan2(8.0, 6.0), 1e-9);
-  EXPECT_LT((x->get<"v">() - v_ned).norm(), 1e-6);
-  EXPECT_TRUE(x->get<"p">() == fix_at(1.0, true).llh);
-
-  // Slower than 5 m/s never aligns; a bad fix breaks the run of good fixes.
-  DynamicAlignment slow;
-  for (int i = 0; i < 12; ++i) {
-    AlignmentFix f = fix_at(0.25 * i, true);
-    f.llh = earth::GeodeticRetraction::inject(start, 0.4 * v_ned * (0.25 * i));
-    EXPECT_FALSE(slow.push(f).has_value());
-  }
-  DynamicAlignment broken;
-  EXPECT_FALSE(broken.push(fix_at(0.0, true)).has_value());
-  EXPECT_FALSE(broken.push(fix_at(0.5, false)).has_value());
-  EXPECT_FALSE(broken.push(fix_at(1.0, true)).has_value());
-  EXPECT_TRUE(broken.push(fix_at(2.0, true)).has_value());
-  // reset() forgets the fixes kept: the fix 1 s after the last one kept no longer aligns.
-  DynamicAlignment again;
-  EXPECT_FALSE(again.push(fix_at(0.0, true)).has_value());
-  again.reset();
-  EXPECT_FALSE(again.push(fix_at(1.0, true)).has_value());
-  EXPECT_TRUE(again.push(fix_at(2.0, true)).has_value());
 }
 
 }  // namespace

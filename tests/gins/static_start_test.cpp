@@ -13,6 +13,36 @@
 namespace {
 using ctxfuse::pipelines::gins::AllanAccumulator;
 using ctxfuse::pipelines::gins::StaticAccumulator;
+using ctxfuse::pipelines::gins::VibrationStaticDetector;
+
+// The window is half a second at any IMU rate: round(0.5 s x rate) samples, and a platform at
+// rest is static once it has filled, not before; a turn of 1 deg/s (above the 0.25 deg/s
+// threshold) is never static.
+TEST(VibrationStaticDetector, TheWindowIsSecondsAtAnyRateRegularOrJittered) {
+  const double g = 0.25 * std::numbers::pi / 180.0;
+  for (double hz : {50.0, 100.0, 150.0, 400.0}) {
+    VibrationStaticDetector rest(0.5, g, 0.25), turn(0.5, g, 0.25);
+    int first_static = -1;
+    for (int i = 0; i < 200; ++i) {
+      const double t = 10.0 + i / hz;
+      if (rest.push(t, Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 0, -9.8)) && first_static < 0) first_static = i;
+      EXPECT_FALSE(turn.push(t, Eigen::Vector3d(0, 0, std::numbers::pi / 180.0), Eigen::Vector3d(0, 0, -9.8)));
+    }
+    const int n = static_cast<int>(std::lround(0.5 * hz));
+    EXPECT_EQ(rest.window_samples(), n) << hz;
+    EXPECT_EQ(first_static, n - 1) << hz;  // static on the sample that fills the window
+  }
+  // Steps uniform in [6, 8.5] ms (about 139 Hz): the count from the stamps, 0.5 s of them.
+  ctxfuse::sim::Rng rng(7);
+  VibrationStaticDetector j(0.5, g, 0.25);
+  double t = 0.0;
+  for (int i = 0; i < 400; ++i, t += rng.uniform(0.006, 0.0085)) j.push(t, Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 0, -9.8));
+  EXPECT_NEAR(j.window_samples(), 0.5 / 0.00725, 5.0);
+  // A sample not after the previous one, or non-finite, changes nothing.
+  EXPECT_TRUE(j.is_static());
+  EXPECT_TRUE(j.push(t - 1.0, Eigen::Vector3d::Constant(1.0), Eigen::Vector3d(0, 0, -9.8)));
+  EXPECT_TRUE(j.push(t, Eigen::Vector3d::Constant(std::nan("")), Eigen::Vector3d(0, 0, -9.8)));
+}
 
 TEST(AllanAccumulator, RampGivesRateTimesTauOverSqrtTwo) {
   const Eigen::Vector3d rate(0.3, -1.2, 2.5);  // units per second

@@ -117,8 +117,8 @@ TEST_F(Imu, MalformedTagFilesAreRefused) {
                      "file too short: 40 bytes");
   EXPECT_PARSE_ERROR(read_time_tag(write("magic.tag", tag_bytes(1, 0.0, {5}, "TIMETAG RTKLIX demo5"))), "magic.tag: ",
                      "header does not start with \"TIMETAG RTKLIB\"");
-  EXPECT_PARSE_ERROR(read_time_tag(write("cut.tag", tag_bytes(1, 0.0, {5, 6}).substr(0, 76 + 8 + 3))), "cut.tag: ",
-                     "truncated: the last record has 3 of its 8 bytes");
+  EXPECT_PARSE_ERROR(read_time_tag(write("cut1.tag", tag_bytes(1, 0.0, {5}).substr(0, 76 + 3))), "cut1.tag: ",
+                     "no whole tick record after the header (3 of 8 bytes)");
   EXPECT_PARSE_ERROR(read_time_tag(write("none.tag", tag_bytes(1, 0.0, {}))), "none.tag: ", "no tick records");
   EXPECT_PARSE_ERROR(read_time_tag(write("frac.tag", tag_bytes(1, 1.5, {5}))), "frac.tag: ", "outside [0, 1)");
   EXPECT_PARSE_ERROR(read_time_tag(write("back.tag", tag_bytes(1, 0.0, {5, 9, 8}))), "back.tag: ",

@@ -9,7 +9,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <iterator>
 #include <string>
 
 #include "support/data_dir.hpp"
@@ -70,6 +73,51 @@ TEST(IoRealData, ImuTimeTagOverlapsGnss) {
   std::cout << "imu: " << imu.size() << " samples, " << log.skipped_lines() << " partial lines skipped, " << rate
             << " Hz, first " << imu.front().t - gnss_first << " s after GNSS, last " << imu.back().t - gnss_last
             << " s after, overlap " << overlap << " s, " << tag.records.size() << " tag records\n";
+}
+
+// The drive maps exactly as the data README's upstream formula (bit for bit), and the same csv
+// cut at 1 MB beside its full tag is not stretched over the tag's span: nominal 1 ms ticks.
+TEST(IoRealData, ImuDriveScaledAsUpstreamAndCutCsvNominal) {
+  CTXFUSE_REQUIRE_DATA(csv_path, "gnss-imu-drive/imu_1934.csv");
+  CTXFUSE_REQUIRE_DATA(tag_path, "gnss-imu-drive/imu_1934.csv.tag");
+  const auto log = read_imu_csv(csv_path);
+  const auto tag = read_time_tag(tag_path);
+  ImuTimeMapping m;
+  const auto imu = to_imu_samples(log, tag, {}, &m);
+  EXPECT_EQ(m.method, ImuTimeMapping::Method::scaled) << m.why;
+  EXPECT_NEAR(m.scale_ppm, 257.0, 0.1) << m.why;  // 548.731 s of tag over 548.590 s of ticks
+  EXPECT_EQ(m.csv_bytes + m.csv_lines, m.tag_last_offset);  // LF here, CRLF when logged
+  const double start = tag.start_s + tag.start_fraction_s, tick0 = static_cast<double>(log.records.front().tick_ms);
+  const double ratio = (tag.records.back().tick_ms / 1000.0) / (static_cast<double>(log.records.back().tick_ms) - tick0);
+  for (std::size_t i = 0; i < imu.size(); ++i)
+    ASSERT_EQ(imu[i].t, start + (static_cast<double>(log.records[i].tick_ms) - tick0) * ratio) << i;
+
+  const auto dir = std::filesystem::temp_directory_path() / "ctxfuse_io_real_cut_imu";
+  std::filesystem::create_directories(dir);
+  {
+    std::ifstream in(csv_path, std::ios::binary);
+    std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    std::ofstream(dir / "imu.csv", std::ios::binary) << text.substr(0, 1000000);
+  }
+  const auto cut = read_imu_csv(dir / "imu.csv");
+  std::filesystem::remove_all(dir);
+  ImuTimeMapping mc;
+  const auto part = to_imu_samples(cut, tag, {}, &mc);
+  EXPECT_EQ(mc.method, ImuTimeMapping::Method::nominal) << mc.why;
+  EXPECT_NE(mc.why.find("the csv is cut short"), std::string::npos) << mc.why;
+  ASSERT_EQ(part.size(), 22228u);
+  const double rate = static_cast<double>(part.size() - 1) / (part.back().t - part.front().t);
+  EXPECT_GT(rate, 99.5);  // not the 40.5 Hz of a stretch over the tag's 549 s
+  EXPECT_LT(rate, 100.5);
+  // The part read nominally departs from the full recording's mapping by the fitted 257 ppm
+  // over its 222 s, 57 ms at its end.
+  double worst = 0.0;
+  for (std::size_t i = 0; i < part.size(); ++i) {
+    ASSERT_EQ(part[i].t, start + (static_cast<double>(cut.records[i].tick_ms) - tick0) * 1e-3);
+    worst = std::max(worst, std::abs(part[i].t - imu[i].t));
+  }
+  EXPECT_NEAR(worst, m.scale_ppm * 1e-6 * mc.csv_span_s, 1e-6);
+  std::cout << "cut drive: " << part.size() << " samples, " << rate << " Hz; " << mc.why << "\n";
 }
 
 TEST(IoRealData, HanyangDynamicCases) {

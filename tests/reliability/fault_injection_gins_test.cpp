@@ -66,7 +66,7 @@ const Sim& sim_drive() {
       f.frame = io::PositionFrame::geodetic;
       f.position = {noisy(0) / test::kDeg, noisy(1) / test::kDeg, noisy(2)};
       f.cov = Eigen::Matrix3d::Identity() * kFixSigma * kFixSigma;
-      f.quality = io::FixQuality::floating;  // the alignment takes fixed or float fixes
+      f.quality = io::FixQuality::floating;  // its 0.25 m sigma floor is below the fixes' 0.3 m
       k.fixes.push_back(f);
     }
     return k;

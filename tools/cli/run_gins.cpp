@@ -1,8 +1,10 @@
 // `ctxfuse run gins --data DIR`: the GNSS/INS error-state pipeline (ctxfuse/pipelines/gins) on
 // one recording folder (one RTKLIB *.pos, one imu*.csv with its .tag), with simulated outages,
-// GNSS decimation, a constraint set, the installation and RTS smoothing as options; scored with
-// the outage protocol (ctxfuse/eval/gins_outages.hpp) against the folder's own RTK-fixed epochs
-// when there are outages. --out writes the trajectory (the smoothed one with --smooth):
+// GNSS decimation, the platform and its constraints, the installation and RTS smoothing as
+// options. Running needs no reference: scoring is apart and optional, against the RTK-fixed
+// epochs of --reference FILE (the outage protocol of ctxfuse/eval/gins_outages.hpp with
+// --outage, and the whole run), or with --outage alone against the folder's own .pos.
+// --out writes the trajectory (the smoothed one with --smooth):
 //   gps_s,lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg,
 //   sd_n,sd_e,sd_d,sd_vn,sd_ve,sd_vd,sd_roll_deg,sd_pitch_deg,sd_yaw_deg,gnss_used
 // (GPST seconds on RTKLIB's 1970-based scale; the GNSS antenna's position; velocity NED [m/s];
@@ -31,7 +33,7 @@ namespace {
 namespace gins = ctxfuse::pipelines::gins;
 
 struct GinsOptions {
-  std::string outage, constraints = "none";
+  std::string outage, constraints, platform, reference;
   double gnss_rate = 0.0, imu_delay = 0.0;
   bool smooth = false;
   std::vector<double> imu_rpy{0.0, 0.0, 0.0}, imu_lever{0.0, 0.0, 0.0}, gnss_lever{0.0, 0.0, 0.0};
@@ -83,6 +85,13 @@ std::string parse_constraints(const std::string& s, gins::Constraints* out) {
   return {};
 }
 
+std::string constraints_name(const gins::Constraints& c) {
+  std::string s;
+  for (const auto& [on, name] : {std::pair{c.zupt, "zupt"}, {c.zihr, "zihr"}, {c.nhc, "nhc"}, {c.mag, "mag"}})
+    if (on) s += (s.empty() ? "" : ",") + std::string(name);
+  return s.empty() ? "none" : s;
+}
+
 const CLI::Validator kFinite([](std::string& s) {
   std::size_t used = 0;
   double v = NAN;
@@ -96,8 +105,17 @@ std::shared_ptr<void> add_options(CLI::App& app) {
                                         "30 s before the last); scored against the RTK-fixed epochs")
       ->check(CLI::Validator([](std::string& s) { return parse_outage(s, nullptr); }, "LEN:PERIOD:START", "outage"));
   app.add_option("--gnss-rate", o->gnss_rate, "decimate GNSS to HZ (default: every fix)")->check(ctxfuse::cli::kPositiveNumber);
-  app.add_option("--constraints", o->constraints, "any of zupt,zihr,nhc,mag (mag: DIR holds a mag*.csv), or none")
+  app.add_option("--constraints", o->constraints,
+                 "any of zupt,zihr,nhc,mag (mag: DIR holds a mag*.csv), or none (default: the --platform's, else none)")
       ->check(CLI::Validator([](std::string& s) { return parse_constraints(s, nullptr); }, "LIST", "constraints"));
+  app.add_option("--platform", o->platform,
+                 "car, pedestrian or robot: the constraints it allows (car, robot: zupt,nhc; pedestrian: zupt) and their "
+                 "figures (pipelines/gins/settings.hpp, settings_for); default: a car's figures, no constraints")
+      ->check(CLI::IsMember({"car", "pedestrian", "robot"}));
+  app.add_option("--reference", o->reference,
+                 "an RTKLIB .pos whose RTK-fixed epochs score the run: the outages with --outage, and the whole run "
+                 "(default with --outage: DIR's own .pos)")
+      ->check(CLI::ExistingFile);
   app.add_flag("--smooth", o->smooth, "RTS-smooth the forward pass (the CSV is then the smoothed trajectory)");
   app.add_option("--imu-rpy", o->imu_rpy, "IMU axes -> body (forward, right, down): roll,pitch,yaw [deg]")
       ->delimiter(',')->expected(3)->check(kFinite);
@@ -158,14 +176,22 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
   const auto& o = *static_cast<const GinsOptions*>(opts.get());
   gins::RunOptions ro;
   if (!o.outage.empty()) parse_outage(o.outage, &ro.outages);
-  parse_constraints(o.constraints, &ro.constraints);
+  const gins::Platform platform = o.platform == "pedestrian" ? gins::Platform::pedestrian
+                                  : o.platform == "robot"    ? gins::Platform::robot
+                                                             : gins::Platform::car;
+  if (!o.constraints.empty()) parse_constraints(o.constraints, &ro.constraints);
+  else if (!o.platform.empty()) ro.constraints = gins::default_constraints(platform);
+  if (ro.constraints.nhc && platform == gins::Platform::pedestrian) {
+    err << "ctxfuse run gins: constraint 'nhc' holds on a wheeled platform only, not on --platform pedestrian\n";
+    return 2;
+  }
   ro.gnss_rate_hz = o.gnss_rate;
   ro.smooth = o.smooth;
   ro.installation.imu_rpy_deg = Eigen::Vector3d(o.imu_rpy[0], o.imu_rpy[1], o.imu_rpy[2]);
   ro.installation.imu_lever_m = Eigen::Vector3d(o.imu_lever[0], o.imu_lever[1], o.imu_lever[2]);
   ro.installation.gnss_lever_m = Eigen::Vector3d(o.gnss_lever[0], o.gnss_lever[1], o.gnss_lever[2]);
   ro.installation.imu_delay_s = o.imu_delay;
-  gins::Settings settings;
+  gins::Settings settings = gins::settings_for(platform);
   if (o.imu_noise.size() == 2) {
     settings.gyro_noise_density = o.imu_noise[0] * gins::kDeg;
     settings.accel_noise_density = o.imu_noise[1];
@@ -177,6 +203,7 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
     ro.progress = [&](double f) { progress.update(f); };
     try {
       rec = gins::read_recording(in.data_dir);
+      if (rec.imu_time.method == io::ImuTimeMapping::Method::nominal) err << "ctxfuse run gins: warning: " << rec.imu_time.why << '\n';
       // Asking for the magnetometer must not run without one and look as if it had.
       if (ro.constraints.mag && rec.mag.empty()) {
         err << "ctxfuse run gins: constraint 'mag' needs a magnetometer stream: no mag*.csv in " << in.data_dir.string() << '\n';
@@ -190,8 +217,9 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
     }
   }
   if (!res.aligned) {
-    err << "ctxfuse run gins: no dynamic alignment (no two used fixes 1 s and "
-        << settings.alignment_min_distance_m << " m apart): no trajectory\n";
+    err << formatted("ctxfuse run gins: no dynamic alignment (no receiver velocity and no straight baseline of fixes over %.1f m "
+                     "within %.0f s gave the heading within %.1f deg): no trajectory\n",
+                     settings.alignment_min_distance_m, settings.alignment_max_span_s, settings.alignment_max_heading_sigma / gins::kDeg);
     return 1;
   }
   const auto& c = res.counts;
@@ -210,7 +238,8 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
   Json doc;
   doc["pipeline_name"] = "gins";
   doc["data"] = in.data_dir.string();
-  doc["constraints"] = o.constraints;
+  doc["platform"] = o.platform.empty() ? "car (default)" : o.platform;
+  doc["constraints"] = constraints_name(ro.constraints);
   doc["gnss_rate_hz"] = o.gnss_rate;
   doc["smooth"] = o.smooth;
   doc["outage"] = o.outage;
@@ -218,8 +247,49 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
   doc["imu_rate_hz"] = res.imu_rate_hz;
   doc["fixes"] = rec.fixes.size();
   doc["alignment_after_first_fix_s"] = res.alignment_time - t0;
+  {
+    const auto& al = res.alignment;
+    Json a;
+    a["time_after_first_fix_s"] = res.alignment_time - t0;
+    a["heading_source"] = models::name_of(al.source);
+    a["heading_deg"] = al.heading / gins::kDeg;
+    a["heading_sigma_deg"] = std::sqrt(al.heading_var) / gins::kDeg;
+    a["baseline_m"] = al.baseline_m;
+    a["baseline_s"] = al.baseline_s;
+    a["speed_mps"] = al.velocity.norm();
+    a["levelled_on_static_start"] = ss.samples > 0;
+    doc["alignment"] = std::move(a);
+  }
+  {
+    Json drops;
+    auto stream = [](const io::StreamReport& r) {
+      Json j;
+      j["delivered"] = r.delivered;
+      j["non_finite"] = r.non_finite;
+      j["backwards"] = r.backwards;
+      j["repeated"] = r.repeated;
+      j["duplicate"] = r.duplicate;
+      j["beyond_imu"] = r.beyond_imu;
+      return j;
+    };
+    drops["imu"] = stream(res.replay.imu);
+    drops["gnss"] = stream(res.replay.streams[0]);
+    drops["mag"] = stream(res.replay.streams[1]);
+    doc["streams"] = std::move(drops);
+  }
   doc["epochs"] = res.forward.size();
   doc["record_bytes"] = res.record_bytes;
+  {
+    Json it;
+    it["method"] = io::to_string(rec.imu_time.method);
+    it["scale_ppm"] = rec.imu_time.scale_ppm;
+    it["bound_ppm"] = rec.imu_time.tolerance_ppm;
+    it["csv_span_s"] = rec.imu_time.csv_span_s;
+    it["tag_span_s"] = rec.imu_time.tag_span_s;
+    it["partial_lines"] = rec.imu_partial_lines;
+    it["why"] = rec.imu_time.why;
+    doc["imu_time_mapping"] = std::move(it);
+  }
   Json counts;
   for (const auto& [k, v] : {std::pair{"gnss_used", c.gnss_used}, {"gnss_withheld", c.gnss_withheld}, {"gnss_decimated", c.gnss_decimated},
                              {"gnss_gated", c.gnss_gated}, {"gnss_released", c.gnss_released}, {"velocity_used", c.velocity_used},
@@ -227,7 +297,8 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
                              {"imu_losses", c.imu_losses}, {"realignments", c.realignments}, {"zupt", c.zupt},
                              {"zupt_gated", c.zupt_gated}, {"zihr", c.zihr},
                              {"zihr_gated", c.zihr_gated}, {"nhc", c.nhc}, {"nhc_gated", c.nhc_gated}, {"mag", c.mag},
-                             {"mag_gated", c.mag_gated}, {"static_samples", c.static_samples}, {"imu_refused", c.imu_refused},
+                             {"mag_gated", c.mag_gated}, {"static_samples", c.static_samples},
+                             {"static_but_moving", c.static_but_moving}, {"imu_refused", c.imu_refused},
                              {"filter_failures", c.filter_failures}})
     counts[k] = v;
   doc["counts"] = std::move(counts);
@@ -244,9 +315,21 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
     st[k] = std::move(a);
   }
   doc["static_start"] = std::move(st);
+  // Scoring, apart from the run: the reference's RTK-fixed epochs (--reference, else with
+  // --outage the recording's own .pos).
   eval::GinsOutageScores sc;
-  if (!res.windows.empty()) {
-    sc = eval::score_outages(rec.fixes, res);
+  std::vector<io::GnssFix> reference;
+  if (!o.reference.empty()) {
+    try {
+      reference = io::to_gnss_fixes(io::read_rtklib_pos(o.reference));
+    } catch (const std::exception& e) {
+      err << "ctxfuse run gins: warning: reference not read, the run is not scored: " << e.what() << '\n';
+    }
+  } else if (!res.windows.empty()) {
+    reference = rec.fixes;
+  }
+  if (!res.windows.empty() && !reference.empty()) {
+    sc = eval::score_outages(reference, res);
     out << formatted("  outages %zu (%zu scored, %zu RTK-fixed epochs, %zu before the alignment): horizontal error RMS / max\n",
                      res.windows.size(), sc.outages_scored, sc.forward.epochs, sc.forward.unscored);
     out << formatted("    forward   %7.3f / %7.3f m\n", sc.forward.rms, sc.forward.max);
@@ -256,6 +339,20 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
       doc["smoothed"] = scores_json(sc.smoothed);
     }
     doc["outages_scored"] = sc.outages_scored;
+  }
+  if (!o.reference.empty() && !reference.empty()) {
+    const auto whole = eval::score_whole_run(reference, res);
+    if (whole.forward.epochs == 0) {
+      err << "ctxfuse run gins: warning: the reference " << o.reference << " has no RTK-fixed epoch inside the trajectory's span\n";
+    } else {
+      out << formatted("  whole run against %s (%zu RTK-fixed epochs): forward %.3f / %.3f m", o.reference.c_str(),
+                       whole.forward.epochs, whole.forward.rms, whole.forward.max);
+      if (o.smooth) out << formatted(", smoothed %.3f / %.3f m", whole.smoothed.rms, whole.smoothed.max);
+      out << " RMS / max\n";
+      doc["reference"] = o.reference;
+      doc["whole_run"]["forward"] = scores_json(whole.forward);
+      if (o.smooth) doc["whole_run"]["smoothed"] = scores_json(whole.smoothed);
+    }
   }
   if (o.smooth && !res.smooth_status.accepted()) {
     err << "ctxfuse run gins: the RTS pass failed (" << describe(res.smooth_status.problem) << ")\n";

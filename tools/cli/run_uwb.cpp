@@ -1,18 +1,23 @@
-// `ctxfuse run uwb --data CASE_DIR [--out traj.csv] [--json metrics.json] [--estimator E]
-// [--policy P] [--train DIR,...]`: the NLOS-robust UWB pipeline of paper C
-// (ctxfuse/pipelines/nlos_uwb) on one Hanyang dynamic case (A<id>.csv ranges; trajectory.csv,
-// the reference, to score), every variant and baseline scored with the dataset authors'
-// protocol (eval/hanyang_protocol.hpp) beside their RMSD_results.txt. The SVM of p1 is trained
-// on --train, by default on the other cases of the same dataset (never on CASE_DIR). --out
-// writes the trajectory of the variant --estimator and --policy choose: time_ns,x,y,z, one row
-// per estimate (z is the tag's fixed height). Parsing and formatting only: the runs and scores
-// are eval::evaluate_nlos_uwb_case.
+// `ctxfuse run uwb --data DIR [--out traj.csv] [--json run.json] [--estimator E] [--policy P]
+// [--nlos-model FILE | --train DIR,...] [--save-nlos-model FILE] [--range-average auto|N]
+// [--tag-height M] [--reference FILE] [--span a|b|auto|none|START/END]`: the NLOS-robust UWB
+// pipeline of paper C (ctxfuse/pipelines/nlos_uwb) on a folder of per-anchor A<id>.csv files.
+// Running needs nothing else: the report period, epoch window and report averaging come from
+// the recording (pipelines/nlos_uwb/recording.hpp), the NLOS classifier is an SVM from
+// --nlos-model, one trained on --train or on the dataset's other cases (those with a
+// reference), or the consistency check alone. --out writes the trajectory of the variant
+// --estimator and --policy choose (time_ns,x,y,z; z is the tag's height). Scoring is a separate
+// step, done when there is a reference (--reference, else the folder's trajectory.csv): every
+// variant and baseline with the authors' protocol on --span (eval/hanyang_protocol.hpp), or the
+// whole run; a reference the span does not fit is a warning, never a failed run. Parsing and
+// formatting only: the runs and scores are eval/nlos_uwb.hpp's.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <ostream>
 #include <span>
 #include <string>
@@ -23,15 +28,21 @@
 #include "cli/options.hpp"
 #include "cli/run_registry.hpp"
 #include "cli/uwb_plots.hpp"
+#include "ctxfuse/classify/svm_io.hpp"
 #include "ctxfuse/eval/nlos_uwb.hpp"
+#include "ctxfuse/pipelines/nlos_uwb/recording.hpp"
 
 namespace ctxfuse::cli {
 namespace {
+
+namespace nu = pipelines::nlos_uwb;
 
 struct UwbOptions {
   std::string estimator = "calibrated";
   std::string policy = "per-range";
   std::vector<std::string> train;
+  std::string nlos_model, save_nlos_model, reference, span = "auto", range_average = "auto";
+  double tag_height_m = nu::Settings{}.tag_height_m;
 };
 
 std::shared_ptr<void> add_options(CLI::App& app) {
@@ -44,9 +55,44 @@ std::shared_ptr<void> add_options(CLI::App& app) {
   app.add_option("--policy", o->policy, "NLOS policy of the trajectory written by --out: paper (epoch rule), per-range, none")
       ->check(CLI::IsMember({"paper", "per-range", "none"}))
       ->capture_default_str();
-  app.add_option("--train", o->train, "cases to train the SVM on, comma-separated (default: the dataset's other cases)")
+  app.add_option("--train", o->train,
+                 "labelled cases (A<id>.csv + trajectory.csv) to train the NLOS SVM on, comma-separated (default: the "
+                 "dataset's other cases that have a reference)")
       ->delimiter(',')
       ->check(CLI::ExistingDirectory);
+  app.add_option("--nlos-model", o->nlos_model, "the NLOS SVM from a file (--save-nlos-model of an earlier run) instead of training one")
+      ->check(CLI::ExistingFile);
+  app.add_option("--save-nlos-model", o->save_nlos_model, "write the SVM this run trained (or loaded) to FILE");
+  app.add_option("--range-average", o->range_average,
+                 "reports are the mean of N raw ranges: auto (detected on the recording's static start; 1 when it does not "
+                 "show) or N in 1..100")
+      ->check(CLI::Validator(
+          [](std::string& s) {
+            int n = 0;
+            const bool number = !s.empty() && s.size() <= 3 && s.find_first_not_of("0123456789") == std::string::npos &&
+                                (n = std::stoi(s)) >= 1 && n <= 100;
+            return s == "auto" || number ? std::string() : "'" + s + "' is neither auto nor an integer in 1..100";
+          },
+          "auto|N", "range average"))
+      ->capture_default_str();
+  app.add_option("--tag-height", o->tag_height_m,
+                 "the tag antenna's height in the anchors' frame [m] (the files do not give it; 1 m: the Hanyang authors' "
+                 "protocol compares z with reference z + 1)")
+      ->check(CLI::Range(-1e4, 1e4))
+      ->capture_default_str();
+  app.add_option("--reference", o->reference, "reference to score against (Hanyang trajectory.csv; default: DIR/trajectory.csv if present)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--span", o->span,
+                 "scoring protocol: a or b (the authors' span of trajectory A or B), auto (the one whose gates the reference "
+                 "passes, else the whole run), none (whole run), or a span START/END of gates like x>49.3,y>-5/x<=12,y>3.4")
+      ->check(CLI::Validator(
+          [](std::string& s) {
+            if (s == "a" || s == "b" || s == "auto" || s == "none") return std::string();
+            eval::HanyangSpan span;
+            return eval::parse_hanyang_span(s, span);
+          },
+          "SPAN", "span"))
+      ->capture_default_str();
   return o;
 }
 
@@ -60,7 +106,7 @@ Json identification_json(const eval::Identification& m) {
   return j;
 }
 
-bool write_trajectory(const std::string& path, const pipelines::nlos_uwb::Track& track, double z, std::ostream& err) {
+bool write_trajectory(const std::string& path, const nu::Track& track, double z, std::ostream& err) {
   std::ofstream os(path);
   os << "time_ns,x,y,z\n";
   char buf[160];
@@ -77,12 +123,11 @@ bool write_trajectory(const std::string& path, const pipelines::nlos_uwb::Track&
   return true;
 }
 
-/// The authors' protocol error of each estimate alone (NaN outside the scored span): the same
-/// numbers as the variant's RMSE, which aggregates them.
-std::vector<double> protocol_errors(std::span<const eval::TimedPoint2> est, std::span<const io::HanyangReferencePose> ref,
-                                    const eval::HanyangSpan& span) {
+/// Each estimate's error under the protocol (NaN where not scored).
+std::vector<double> uwb_errors(std::span<const eval::TimedPoint2> est, std::span<const io::HanyangReferencePose> ref,
+                               const eval::ScoringProtocol& p) {
   std::vector<double> out;
-  eval::hanyang_rmse_2d(est, ref, span, &out);
+  eval::score_2d(est, ref, p, &out);
   return out;
 }
 
@@ -91,99 +136,279 @@ std::vector<double> scored(std::vector<double> errors) {
   return errors;
 }
 
-// --plot: the chosen variant against the reference; beside its CDF the paper's pipeline, the
-// gate alone, LS, and the authors' ESKF (their ESKF.csv) when the case has it.
-void plot_case(const std::string& dir, const eval::NlosUwbCaseReport& rep, const std::string& chosen, const std::filesystem::path& case_dir,
-               std::ostream& out, std::ostream& err) {
+struct UwbScoring {
+  std::vector<io::HanyangReferencePose> reference;
+  eval::ScoringProtocol protocol;
+};
+
+// --plot: the chosen variant, with the reference when there is one; beside its CDF the paper's
+// pipeline, the gate alone, LS, and the authors' ESKF (their ESKF.csv) when the case has it.
+void plot_case(const std::string& dir, const std::vector<eval::NlosUwbVariant>& variants, const std::string& chosen,
+               const std::filesystem::path& case_dir, const UwbScoring* scoring, std::ostream& out, std::ostream& err) {
   Plotter plotter(dir, err);
   if (plotter.available()) {
-    const auto span = eval::trajectory_a_span();
-    const auto ref = io::read_hanyang_reference(case_dir);
-    const auto& track = rep.variant(chosen).track;
+    auto variant = [&](std::string_view name) -> const eval::NlosUwbVariant* {
+      for (const auto& v : variants)
+        if (v.name == name) return &v;
+      return nullptr;
+    };
+    const auto& track = variant(chosen)->track;
     UwbPlots p;
     p.prefix = "uwb";
     p.estimator = chosen;
-    for (const auto& r : ref)
-      if (std::abs(r.position.z()) < span.max_abs_z) p.reference.push_back(r.position.head<2>());
+    if (scoring) {
+      const double max_z = scoring->protocol.span ? scoring->protocol.span->max_abs_z : std::numeric_limits<double>::infinity();
+      for (const auto& r : scoring->reference)
+        if (std::abs(r.position.z()) < max_z) p.reference.push_back(r.position.head<2>());
+    }
     std::vector<int> ids;
     for (const auto& rec : track.ranges)
       if (std::find(ids.begin(), ids.end(), rec.range.anchor_id) == ids.end()) {
         ids.push_back(rec.range.anchor_id);
         p.anchors.push_back(rec.range.anchor_position.head<2>());
       }
-    const auto errors = protocol_errors(eval::timed_points(track), ref, span);
+    std::vector<double> errors(track.estimates.size(), std::nan(""));
+    if (scoring) errors = uwb_errors(eval::timed_points(track), scoring->reference, scoring->protocol);
     for (std::size_t i = 0; i < track.estimates.size(); ++i) {
       const auto& e = track.estimates[i];
       p.estimates.push_back({e.t, e.position, e.epoch_attached, errors[i]});
     }
     p.t0 = track.estimates.empty() ? 0.0 : track.estimates.front().t;
     p.time_label = "time since the first estimate [s]";
-    for (const char* name : {"ekf_gate_paper_rule", "ekf_gate", "least_squares"})
-      if (name != chosen) p.other_errors.emplace_back(name, scored(protocol_errors(eval::timed_points(rep.variant(name).track), ref, span)));
-    if (std::filesystem::exists(case_dir / "ESKF.csv"))
-      p.other_errors.emplace_back("authors' ESKF", scored(protocol_errors(eval::read_hanyang_estimates(case_dir / "ESKF.csv"), ref, span)));
+    if (scoring) {
+      for (const char* name : {"ekf_gate_paper_rule", "ekf_gate", "least_squares"})
+        if (const auto* v = variant(name); v && name != chosen)
+          p.other_errors.emplace_back(name, scored(uwb_errors(eval::timed_points(v->track), scoring->reference, scoring->protocol)));
+      if (std::filesystem::exists(case_dir / "ESKF.csv"))
+        p.other_errors.emplace_back("authors' ESKF", scored(uwb_errors(eval::read_hanyang_estimates(case_dir / "ESKF.csv"),
+                                                                       scoring->reference, scoring->protocol)));
+    }
     plot_uwb(plotter, p);
   }
   plotter.print_written(out);
 }
 
+Json recording_json(const io::HanyangUwbCase& rc, const nu::RecordingFacts& f) {
+  Json j, anchors = Json::array();
+  for (const auto& a : f.anchors) {
+    Json x;
+    x["id"] = a.id;
+    x["position_m"] = Json(Json::Array{a.position.x(), a.position.y(), a.position.z()});
+    x["ranges"] = static_cast<double>(a.ranges);
+    x["median_interval_s"] = a.median_interval_s;
+    x["rate_hz"] = 1.0 / a.median_interval_s;
+    anchors.push_back(std::move(x));
+  }
+  j["anchors"] = std::move(anchors);
+  j["ranges"] = static_cast<double>(rc.ranges.size());
+  j["ranges_with_unknown_power"] = static_cast<double>(rc.non_finite_rssi);
+  j["duration_s"] = f.t_end - f.t_begin;
+  j["static_start_s"] = f.static_start_s;
+  Json acf = Json::array();
+  for (double a : f.autocorrelation) acf.push_back(a);
+  j["range_difference_autocorrelation_lags_1_10"] = std::move(acf);
+  j["detected_range_average_samples"] = f.averaging_detected ? Json(f.range_average_samples) : Json(std::nan(""));
+  j["range_average_note"] = f.averaging_note;
+  return j;
+}
+
+Json track_json(const nu::Track& t) {
+  Json j;
+  j["epochs"] = static_cast<double>(t.epochs);
+  j["epochs_attached"] = static_cast<double>(t.epochs_attached);
+  j["epochs_left_out"] = static_cast<double>(t.epochs_left_out);
+  j["starts"] = static_cast<double>(t.starts);
+  j["restarts"] = static_cast<double>(t.restarts);
+  j["ranges"] = static_cast<double>(t.ranges.size());
+  j["ranges_attached"] = static_cast<double>(t.ranges_attached);
+  j["ranges_accepted"] = static_cast<double>(t.ranges_accepted);
+  j["ranges_gated"] = static_cast<double>(t.ranges_gated);
+  j["ranges_invalid"] = static_cast<double>(t.ranges_invalid);
+  std::size_t nlos = 0;
+  for (const auto& r : t.ranges) nlos += r.verdict.nlos;
+  j["ranges_classified_nlos"] = static_cast<double>(nlos);
+  return j;
+}
+
 int run_uwb(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::ostream& err) {
   const auto& o = *static_cast<const UwbOptions*>(opts.get());
-  const pipelines::nlos_uwb::Settings settings;
+  std::ostream& out = in.out;
+  if (!o.nlos_model.empty() && !o.train.empty()) {
+    err << "ctxfuse run uwb: --nlos-model and --train both choose the SVM: give one\n";
+    return 2;
+  }
+  const std::string rule = o.policy == "paper" ? "_paper_rule" : o.policy == "none" ? "" : "_per_range";
+  const std::string chosen = (o.estimator == "ekf" ? "ekf_gate" : "calibrated_ekf_gate") + rule + (o.estimator == "calibrated-lag" ? "_lag" : "");
+
+  // --- The run: the recording alone ------------------------------------------------------------
+  io::HanyangUwbCase rc;
+  nu::RecordingFacts facts;
+  nu::Settings settings;
+  std::optional<nu::NlosSvm> svm;
+  std::string classifier_kind = "consistency-only", classifier_note;
   std::vector<std::filesystem::path> train(o.train.begin(), o.train.end());
-  eval::NlosUwbCaseReport rep;
+  std::vector<eval::NlosUwbVariant> variants;
+  const std::filesystem::path ref_path =
+      !o.reference.empty() ? std::filesystem::path(o.reference)
+                           : (std::filesystem::exists(in.data_dir / "trajectory.csv") ? in.data_dir / "trajectory.csv" : std::filesystem::path());
   try {
-    if (o.train.empty()) train = eval::other_hanyang_cases(in.data_dir);
-    rep = eval::evaluate_nlos_uwb_case(in.data_dir, train, settings, eval::trajectory_a_span());
+    rc = io::read_hanyang_uwb(in.data_dir);
+    const auto ranges = rc.uwb_ranges();
+    facts = nu::describe_recording(ranges);
+    nu::Settings base;
+    base.tag_height_m = o.tag_height_m;
+    std::string problem;
+    settings = nu::settings_for_recording(facts, base, o.range_average == "auto" ? 0 : std::stoi(o.range_average), problem);
+    if (!problem.empty()) {
+      err << "ctxfuse run uwb: " << in.data_dir.string() << ": " << problem << '\n';
+      return 1;
+    }
+    for (const auto& c : train)
+      if (std::filesystem::weakly_canonical(c) == std::filesystem::weakly_canonical(in.data_dir))
+        throw std::invalid_argument("the run's own folder " + in.data_dir.string() + " is among the SVM's training cases");
+    if (!o.nlos_model.empty()) {
+      svm = classify::load_svm_model<2, 2>(o.nlos_model);
+      classifier_kind = "svm-file";
+      classifier_note = "loaded from " + o.nlos_model;
+    } else {
+      if (train.empty()) train = eval::other_hanyang_cases(in.data_dir);
+      if (!train.empty()) {
+        svm = eval::train_svm_on_cases(train, settings);
+        classifier_kind = "svm-siblings";
+        classifier_note = "trained on " + std::to_string(train.size()) + " labelled cases";
+      } else {
+        // The labelled static set cannot train this SVM: its features are the range rate and
+        // the platform's speed, and a static tag has neither.
+        classifier_note = "no labelled cases and no --nlos-model: the consistency check alone (R = p2)";
+      }
+    }
+    const nu::NlosClassifier classifier(settings, svm);
+    if (ref_path.empty()) {
+      const std::string_view names[] = {chosen};
+      variants = eval::run_nlos_uwb_variants(ranges, classifier, settings, names);
+    } else {
+      variants = eval::run_nlos_uwb_variants(ranges, classifier, settings);
+    }
   } catch (const std::exception& e) {
     err << "ctxfuse run uwb: " << e.what() << '\n';
     return 1;
   }
-  const std::string rule = o.policy == "paper" ? "_paper_rule" : o.policy == "none" ? "" : "_per_range";
-  const std::string chosen = (o.estimator == "ekf" ? "ekf_gate" : "calibrated_ekf_gate") + rule + (o.estimator == "calibrated-lag" ? "_lag" : "");
-  std::ostream& out = in.out;
-  out << "uwb on " << in.data_dir.string() << ": SVM " << (rep.svm ? "trained on " + std::to_string(train.size()) + " other cases" : "none (R = p2)")
-      << "\n2-D RMSE, authors' protocol (m):\n";
-  Json doc, rmse, epochs;
-  for (const auto& v : rep.variants) {
-    out << formatted("  %-36s %7.3f  (%zu estimates scored, %zu epochs left out)\n", v.name.c_str(), v.rmse.rmse_2d, v.rmse.scored,
-                     v.track.epochs_left_out);
-    rmse[v.name] = v.rmse.rmse_2d;
-    epochs[v.name] = static_cast<double>(v.track.epochs_left_out);
-  }
-  Json authors;
-  for (const char* who : {"LS", "ESKF"})
-    if (const auto it = rep.authors.find(std::string(who) + " RMSE_2d"); it != rep.authors.end()) {
-      out << formatted("  authors %-28s %7.3f\n", who, it->second);
-      authors[who] = it->second;
-    }
-  out << "NLOS identification against residual labels (paper rule run): precision / recall / accuracy\n";
-  const auto& id = rep.identification;
-  for (const auto& [name, m] : {std::pair{"svm", id.svm}, std::pair{"consistency", id.consistency}, std::pair{"ds", id.ds}})
-    out << formatted("  %-12s %.3f / %.3f / %.3f  (%zu ranges, %zu NLOS)\n", name, m.precision, m.recall, m.accuracy, m.scored,
-                     m.labelled_nlos);
+  const auto chosen_it = std::find_if(variants.begin(), variants.end(), [&](const auto& v) { return v.name == chosen; });
+  const auto& track = chosen_it->track;
+  out << "uwb on " << in.data_dir.string() << ": " << facts.anchors.size() << " anchors, " << rc.ranges.size() << " ranges, report period "
+      << formatted("%.4f s", settings.range_period_s) << ", reports the mean of " << settings.range_average_samples << " ("
+      << (o.range_average == "auto" ? facts.averaging_note : "--range-average") << ")\nNLOS classifier: " << classifier_kind << " ("
+      << classifier_note << ")\n"
+      << formatted("%s: %zu estimates, %zu epochs (%zu left out), %zu ranges attached, %zu accepted, %zu gated, %zu starts, %zu restarts\n",
+                   chosen.c_str(), track.estimates.size(), track.epochs, track.epochs_left_out, track.ranges_attached,
+                   track.ranges_accepted, track.ranges_gated, track.starts, track.restarts);
 
-  const auto& track = rep.variant(chosen).track;
+  Json doc;
   doc["pipeline_name"] = "uwb";
   doc["data"] = in.data_dir.string();
   doc["trajectory_variant"] = chosen;
   doc["estimates"] = static_cast<double>(track.estimates.size());
-  doc["svm"] = rep.svm;
-  if (rep.svm) doc["svm_gamma"] = rep.svm_gamma;
+  doc["nlos_classifier"] = classifier_kind;
+  doc["nlos_classifier_note"] = classifier_note;
+  doc["svm"] = svm.has_value();
+  if (svm) doc["svm_gamma"] = svm->gamma;
   Json cases = Json::array();
-  for (const auto& c : rep.training_cases) cases.push_back(c.string());
+  if (classifier_kind == "svm-siblings")
+    for (const auto& c : train) cases.push_back(c.string());
   doc["training_cases"] = std::move(cases);
-  doc["rmse_2d_m"] = std::move(rmse);
-  doc["epochs_left_out"] = std::move(epochs);
-  doc["authors_rmse_2d_m"] = std::move(authors);
-  doc["identification"]["svm"] = identification_json(id.svm);
-  doc["identification"]["consistency"] = identification_json(id.consistency);
-  doc["identification"]["ds"] = identification_json(id.ds);
+  doc["recording"] = recording_json(rc, facts);
+  Json& js = doc["settings"];
+  js["range_period_s"] = settings.range_period_s;
+  js["epoch_window_s"] = settings.epoch_window_s;
+  js["range_average_samples"] = settings.range_average_samples;
+  js["range_average_source"] = o.range_average == "auto" ? "detected" : "option";
+  js["tag_height_m"] = settings.tag_height_m;
+  js["tag_height_source"] = o.tag_height_m == nu::Settings{}.tag_height_m ? "default" : "option";
+  js["smoothed_output_lag_s"] = settings.smoothed_output_lag_s;
+  js["lag_records_needed"] = nu::lag_records_needed(facts, settings);
+  js["lag_records"] = settings.lag_records;
+  doc["run"] = track_json(track);
+
+  // --- Scoring, when there is a reference ------------------------------------------------------
+  std::optional<UwbScoring> scoring;
+  if (!ref_path.empty()) {
+    try {
+      UwbScoring sc;
+      sc.reference = io::read_hanyang_reference_file(ref_path);
+      sc.protocol = eval::choose_protocol(o.span, sc.reference);
+      eval::score_nlos_uwb_variants(variants, sc.reference, sc.protocol);
+      scoring = std::move(sc);
+    } catch (const std::exception& e) {
+      err << "ctxfuse run uwb: warning: not scored: " << e.what() << '\n';
+      doc["scoring"]["warning"] = std::string("not scored: ") + e.what();
+    }
+  }
+  if (scoring) {
+    const auto& p = scoring->protocol;
+    if (!p.warning.empty()) err << "ctxfuse run uwb: warning: " << p.warning << '\n';
+    out << "2-D RMSE against " << ref_path.string() << ", "
+        << (p.span ? "authors' protocol, span " + p.name + " (" + eval::describe(p.span->start) + " to " + eval::describe(p.span->end) + ")"
+                   : std::string("whole run"))
+        << " (m):\n";
+    Json rmse, epochs;
+    for (const auto& v : variants) {
+      out << formatted("  %-36s %7.3f  (%zu estimates scored, %zu epochs left out)\n", v.name.c_str(), v.rmse.rmse_2d, v.rmse.scored,
+                       v.track.epochs_left_out);
+      rmse[v.name] = v.rmse.rmse_2d;
+      epochs[v.name] = static_cast<double>(v.track.epochs_left_out);
+    }
+    std::map<std::string, double> authors_rmsd;
+    if (std::filesystem::exists(in.data_dir / "RMSD_results.txt")) {
+      try {
+        authors_rmsd = eval::read_hanyang_rmsd(in.data_dir / "RMSD_results.txt");
+      } catch (const std::exception& e) {
+        err << "ctxfuse run uwb: warning: " << e.what() << '\n';
+      }
+    }
+    Json authors;
+    for (const char* who : {"LS", "ESKF"})
+      if (const auto it = authors_rmsd.find(std::string(who) + " RMSE_2d"); it != authors_rmsd.end()) {
+        out << formatted("  authors %-28s %7.3f\n", who, it->second);
+        authors[who] = it->second;
+      }
+    const auto id = eval::identification(variants.front().track, scoring->reference, settings);
+    out << "NLOS identification against residual labels (" << variants.front().name << " run): precision / recall / accuracy\n";
+    for (const auto& [name, m] : {std::pair{"svm", id.svm}, std::pair{"consistency", id.consistency}, std::pair{"ds", id.ds}})
+      out << formatted("  %-12s %.3f / %.3f / %.3f  (%zu ranges, %zu NLOS)\n", name, m.precision, m.recall, m.accuracy, m.scored,
+                       m.labelled_nlos);
+    Json& s = doc["scoring"];
+    s["reference"] = ref_path.string();
+    s["protocol"] = p.name;
+    if (p.span) s["span"] = eval::describe(p.span->start) + "/" + eval::describe(p.span->end);
+    s["warning"] = p.warning;
+    s["t_begin"] = chosen_it->rmse.t_begin;
+    s["t_end"] = chosen_it->rmse.t_end;
+    s["scored"] = static_cast<double>(chosen_it->rmse.scored);
+    doc["rmse_2d_m"] = std::move(rmse);
+    doc["epochs_left_out"] = std::move(epochs);
+    doc["authors_rmse_2d_m"] = std::move(authors);
+    doc["identification"]["svm"] = identification_json(id.svm);
+    doc["identification"]["consistency"] = identification_json(id.consistency);
+    doc["identification"]["ds"] = identification_json(id.ds);
+  }
+
   if (!in.out_csv.empty() && !write_trajectory(in.out_csv, track, settings.tag_height_m, err)) return 1;
   if (!in.json.empty() && !write_json_file(doc, in.json, "run uwb", err)) return 1;
+  if (!o.save_nlos_model.empty()) {
+    if (!svm) {
+      err << "ctxfuse run uwb: --save-nlos-model: this run has no SVM (" << classifier_note << ")\n";
+      return 1;
+    }
+    try {
+      classify::save_svm_model(o.save_nlos_model, *svm);
+    } catch (const std::exception& e) {
+      err << "ctxfuse run uwb: --save-nlos-model: " << e.what() << '\n';
+      return 1;
+    }
+  }
   if (!in.plot.empty()) {
     try {
-      plot_case(in.plot, rep, chosen, in.data_dir, out, err);
+      plot_case(in.plot, variants, chosen, in.data_dir, scoring ? &*scoring : nullptr, out, err);
     } catch (const std::exception& e) {
       err << "ctxfuse run uwb: plots: " << e.what() << '\n';
       return 1;
@@ -192,10 +417,11 @@ int run_uwb(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::os
   return 0;
 }
 
-const RegisterRunPipeline reg_run_uwb{{"uwb", "NLOS-robust UWB (paper C) on a Hanyang dynamic case, with its baselines",
-                               "A<id>.csv per anchor (trajectory.csv and RMSD_results.txt to score; the other cases of the "
-                               "dataset, or --train, for the SVM)",
-                               add_options, {}, run_uwb}};
+const RegisterRunPipeline reg_run_uwb{
+    {"uwb", "NLOS-robust UWB (paper C) on a folder of per-anchor ranges, with its baselines when scored",
+     "A<id>.csv per anchor, nothing else (a reference, --reference or trajectory.csv, to score; labelled cases, "
+     "--nlos-model or the dataset's other cases, for the NLOS SVM)",
+     add_options, {}, run_uwb}};
 
 }  // namespace
 }  // namespace ctxfuse::cli

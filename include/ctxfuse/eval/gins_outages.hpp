@@ -3,6 +3,7 @@
 // Also the installation of the gnss-imu-drive recording, as its data README gives it.
 #pragma once
 
+#include <cmath>
 #include <span>
 #include <vector>
 
@@ -41,6 +42,20 @@ inline GinsOutageScores score_outages(std::span<const io::GnssFix> fixes, const 
   s.forward = outage_errors(lat_lon_of(run.forward), ref, run.windows);
   if (!run.smoothed.empty()) s.smoothed = outage_errors(lat_lon_of(run.smoothed), ref, run.windows);
   for (const auto& o : s.forward.outages) s.outages_scored += o.epochs > 0 ? 1 : 0;
+  return s;
+}
+
+/// The whole run against a reference: the horizontal error at every RTK-fixed reference epoch
+/// inside the trajectory's span (one window over the reference's span; epochs outside the
+/// trajectory are counted as unscored).
+inline GinsOutageScores score_whole_run(std::span<const io::GnssFix> reference, const pipelines::gins::RunResult& run) {
+  const auto ref = rtk_fixed_reference(reference);
+  GinsOutageScores s;
+  if (ref.empty()) return s;
+  const pipelines::gins::OutageWindow all[1] = {{ref.front().t, std::nextafter(ref.back().t, ref.back().t + 1.0)}};
+  s.forward = outage_errors(lat_lon_of(run.forward), ref, all);
+  if (!run.smoothed.empty()) s.smoothed = outage_errors(lat_lon_of(run.smoothed), ref, all);
+  s.outages_scored = s.forward.epochs > 0 ? 1 : 0;
   return s;
 }
 

@@ -2,18 +2,24 @@
 // it): the evaluated span runs from the first reference sample inside the track's start gate to
 // the first later one inside its end gate; reference samples with |z| >= 0.5 m are dropped; the
 // kept reference is interpolated linearly to each estimate's time in the span (held at its
-// ends); 2-D RMSE over the estimates in the span. Also the readers of the authors' own result
-// files (LS.csv, ESKF.csv: timestamp [ns], x, y, z; RMSD_results.txt), so that their figures are
-// recomputed here and quoted from their file, never typed in.
+// ends); 2-D RMSE over the estimates in the span. Both spans of the dataset README (trajectory
+// A and B), custom spans read from text (parse_hanyang_span), and the plain whole-run 2-D RMSE
+// for a reference no span fits; choose_protocol picks one for a reference and says why a span
+// asked for does not fit (find_span). Also the readers of trajectory CSVs (ours, time_ns; the
+// authors' LS.csv, ESKF.csv: timestamp [ns], x, y, z) and of RMSD_results.txt, so that their
+// figures are recomputed here and quoted from their file, never typed in.
 #pragma once
 
 #include <Eigen/Core>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <initializer_list>
 #include <map>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -25,13 +31,27 @@
 
 namespace ctxfuse::eval {
 
-/// One axis-aligned gate: x and y each compared against a bound (> or <= as flagged).
-struct TrackGate {
-  double x = 0.0, y = 0.0;
-  bool x_above = true, y_above = true;  // x > bound (else x <= bound / x < bound as below)
-  bool contains(const Eigen::Vector3d& p) const {
-    return (x_above ? p.x() > x : p.x() <= x) && (y_above ? p.y() > y : p.y() <= y);
+/// One bound of a gate on one axis: none, or the coordinate compared with `value`.
+struct AxisBound {
+  enum class Op : std::uint8_t { none, gt, ge, lt, le };
+  Op op = Op::none;
+  double value = 0.0;
+  bool contains(double v) const {
+    switch (op) {
+      case Op::gt: return v > value;
+      case Op::ge: return v >= value;
+      case Op::lt: return v < value;
+      case Op::le: return v <= value;
+      case Op::none: return true;
+    }
+    return true;
   }
+};
+
+/// One axis-aligned gate: the conditions on x and on y both hold.
+struct TrackGate {
+  AxisBound x, y;
+  bool contains(const Eigen::Vector3d& p) const { return x.contains(p.x()) && y.contains(p.y()); }
 };
 
 struct HanyangSpan {
@@ -40,11 +60,102 @@ struct HanyangSpan {
 };
 
 /// Trajectory A: from the first sample with x > 49.3 and y > -5 to the first later one with
-/// x <= 12 and y > 3.4. Trajectory B: from x < 8.6 and y < -7 to x > 8.6 and y < -7 (both
-/// strict in the authors' text; the 8.6 bound is met exactly by no float sample, so < and <=
-/// agree).
-inline HanyangSpan trajectory_a_span() { return {{49.3, -5.0, true, true}, {12.0, 3.4, false, true}}; }
-inline HanyangSpan trajectory_b_span() { return {{8.6, -7.0, false, false}, {8.6, -7.0, true, false}}; }
+/// x <= 12 and y > 3.4. Trajectory B: from x < 8.6 and y < -7 to x > 8.6 and y < -7 (as in the
+/// authors' text).
+inline HanyangSpan trajectory_a_span() {
+  using O = AxisBound::Op;
+  return {{{O::gt, 49.3}, {O::gt, -5.0}}, {{O::le, 12.0}, {O::gt, 3.4}}};
+}
+inline HanyangSpan trajectory_b_span() {
+  using O = AxisBound::Op;
+  return {{{O::lt, 8.6}, {O::lt, -7.0}}, {{O::gt, 8.6}, {O::lt, -7.0}}};
+}
+
+/// "x>49.3,y>-5": the gate in the form parse_track_gate reads.
+inline std::string describe(const TrackGate& g) {
+  std::string out;
+  auto one = [&](char axis, const AxisBound& b) {
+    static constexpr const char* ops[] = {"", ">", ">=", "<", "<="};
+    if (b.op == AxisBound::Op::none) return;
+    if (!out.empty()) out += ',';
+    out += io::cat(axis, std::string_view(ops[static_cast<int>(b.op)]), b.value);
+  };
+  one('x', g.x);
+  one('y', g.y);
+  return out.empty() ? "anywhere" : out;
+}
+
+/// Reads a gate "x>49.3,y>-5" (comma-separated conditions on x and/or y with >, >=, <, <=;
+/// each axis at most once, at least one axis). Returns "" or what is wrong.
+inline std::string parse_track_gate(std::string_view text, TrackGate& out) {
+  out = TrackGate{};
+  if (text.empty()) return "empty gate";
+  while (!text.empty()) {
+    const auto comma = text.find(',');
+    std::string_view cond = text.substr(0, comma);
+    text = comma == std::string_view::npos ? std::string_view() : text.substr(comma + 1);
+    if (comma != std::string_view::npos && text.empty()) return "a comma ends the gate";
+    cond = io::trim(cond);
+    if (cond.size() < 3 || (cond[0] != 'x' && cond[0] != 'y'))
+      return "condition '" + std::string(cond) + "' does not start with x or y";
+    AxisBound& b = cond[0] == 'x' ? out.x : out.y;
+    if (b.op != AxisBound::Op::none) return std::string("axis ") + cond[0] + " given twice";
+    std::string_view rest = io::trim(cond.substr(1));
+    if (rest.starts_with(">=")) b.op = AxisBound::Op::ge, rest.remove_prefix(2);
+    else if (rest.starts_with("<=")) b.op = AxisBound::Op::le, rest.remove_prefix(2);
+    else if (rest.starts_with(">")) b.op = AxisBound::Op::gt, rest.remove_prefix(1);
+    else if (rest.starts_with("<")) b.op = AxisBound::Op::lt, rest.remove_prefix(1);
+    else return "condition '" + std::string(cond) + "' has no comparison (>, >=, <, <=)";
+    if (io::parse_real(io::trim(rest), b.value) != io::NumberError::none || !std::isfinite(b.value))
+      return "condition '" + std::string(cond) + "' has no finite number after its comparison";
+  }
+  return {};
+}
+
+/// Reads a custom span "START/END", each a gate for parse_track_gate, e.g. the trajectory A
+/// span as "x>49.3,y>-5/x<=12,y>3.4". Returns "" or what is wrong.
+inline std::string parse_hanyang_span(std::string_view text, HanyangSpan& out) {
+  const auto slash = text.find('/');
+  if (slash == std::string_view::npos || text.find('/', slash + 1) != std::string_view::npos)
+    return "a span is START/END (two gates separated by one '/'), e.g. x>49.3,y>-5/x<=12,y>3.4";
+  out = HanyangSpan{};
+  if (std::string e = parse_track_gate(text.substr(0, slash), out.start); !e.empty()) return "start gate: " + e;
+  if (std::string e = parse_track_gate(text.substr(slash + 1), out.end); !e.empty()) return "end gate: " + e;
+  return {};
+}
+
+/// Where the span lies on `reference`: indices of its first sample in the start gate and of the
+/// first later one in the end gate. `problem` says why there is none ("" when there is).
+struct SpanBounds {
+  std::size_t begin = 0, end = 0;
+  std::string problem;
+};
+
+inline SpanBounds find_span(std::span<const io::HanyangReferencePose> reference, const HanyangSpan& span) {
+  SpanBounds b;
+  std::size_t i0 = 0;
+  while (i0 < reference.size() && !span.start.contains(reference[i0].position)) ++i0;
+  if (i0 >= reference.size()) {
+    b.problem = "the reference never enters the start gate (" + describe(span.start) + ")";
+    return b;
+  }
+  std::size_t i1 = i0 + 1;
+  while (i1 < reference.size() && !span.end.contains(reference[i1].position)) ++i1;
+  if (i1 >= reference.size()) {
+    b.problem = "the reference never reaches the end gate (" + describe(span.end) + ") after the start gate (" +
+                describe(span.start) + ")";
+    return b;
+  }
+  bool kept = false;
+  for (std::size_t i = i0; i <= i1 && !kept; ++i) kept = std::abs(reference[i].position.z()) < span.max_abs_z;
+  if (!kept) {
+    b.problem = "no reference sample in the span has |z| < " + io::cat(span.max_abs_z) + " m";
+    return b;
+  }
+  b.begin = i0;
+  b.end = i1;
+  return b;
+}
 
 struct TimedPoint2 {
   double t = 0.0;
@@ -59,19 +170,15 @@ struct ProtocolRmse {
 
 /// The authors' 2-D RMSE of `estimates` (time order) against `reference`; with `errors`, also
 /// each estimate's own 2-D error, the numbers the RMSE aggregates (NaN outside the span). Throws
-/// std::invalid_argument when the span's gates are never passed or no reference sample is kept.
+/// std::invalid_argument naming find_span's problem when the reference does not fit the span.
 inline ProtocolRmse hanyang_rmse_2d(std::span<const TimedPoint2> estimates, std::span<const io::HanyangReferencePose> reference,
                                     const HanyangSpan& span, std::vector<double>* errors = nullptr) {
-  std::size_t i0 = 0;
-  while (i0 < reference.size() && !span.start.contains(reference[i0].position)) ++i0;
-  std::size_t i1 = i0 + 1;
-  while (i1 < reference.size() && !span.end.contains(reference[i1].position)) ++i1;
-  if (i0 >= reference.size() || i1 >= reference.size())
-    throw std::invalid_argument("hanyang_rmse_2d: the reference never passes the span's start and end gates");
+  const SpanBounds bounds = find_span(reference, span);
+  if (!bounds.problem.empty()) throw std::invalid_argument("hanyang_rmse_2d: " + bounds.problem);
+  const std::size_t i0 = bounds.begin, i1 = bounds.end;
   std::vector<io::HanyangReferencePose> kept;
   for (std::size_t i = i0; i <= i1; ++i)
     if (std::abs(reference[i].position.z()) < span.max_abs_z) kept.push_back(reference[i]);
-  if (kept.empty()) throw std::invalid_argument("hanyang_rmse_2d: no reference sample in the span has |z| < max_abs_z");
   ProtocolRmse out;
   out.t_begin = reference[i0].t;
   out.t_end = reference[i1].t;
@@ -100,12 +207,113 @@ inline ProtocolRmse hanyang_rmse_2d(std::span<const TimedPoint2> estimates, std:
   return out;
 }
 
-/// The authors' estimates (LS.csv / ESKF.csv of a case): timestamp [ns], x, y, z [m]; stamps
-/// must not decrease.
+/// Plain 2-D RMSE over the whole run, for a reference no protocol applies to: every reference
+/// sample kept, interpolated linearly to each estimate's time; estimates outside the
+/// reference's time span are not scored. `errors` as for hanyang_rmse_2d. Throws
+/// std::invalid_argument when the reference has fewer than two samples.
+inline ProtocolRmse plain_rmse_2d(std::span<const TimedPoint2> estimates, std::span<const io::HanyangReferencePose> reference,
+                                  std::vector<double>* errors = nullptr) {
+  if (reference.size() < 2) throw std::invalid_argument("plain_rmse_2d: the reference needs at least two samples");
+  ProtocolRmse out;
+  out.t_begin = reference.front().t;
+  out.t_end = reference.back().t;
+  if (errors) errors->assign(estimates.size(), std::nan(""));
+  double sq = 0.0;
+  std::size_t j = 0;
+  for (std::size_t k = 0; k < estimates.size(); ++k) {
+    const TimedPoint2& e = estimates[k];
+    if (!(e.t >= out.t_begin && e.t <= out.t_end)) continue;
+    if (k > 0 && e.t < estimates[k - 1].t) j = 0;  // out of time order: search again
+    while (j + 2 < reference.size() && reference[j + 1].t < e.t) ++j;
+    const double a = (e.t - reference[j].t) / (reference[j + 1].t - reference[j].t);
+    const Eigen::Vector2d ref = (1.0 - a) * reference[j].position.head<2>() + a * reference[j + 1].position.head<2>();
+    const double e2 = (e.p - ref).squaredNorm();
+    if (errors) (*errors)[k] = std::sqrt(e2);
+    sq += e2;
+    ++out.scored;
+  }
+  if (out.scored > 0) out.rmse_2d = std::sqrt(sq / static_cast<double>(out.scored));
+  return out;
+}
+
+/// How a run is scored: the authors' protocol on a span, or the plain whole-run error.
+struct ScoringProtocol {
+  std::string name;  // "trajectory_a", "trajectory_b", "custom" or "whole_run"
+  std::optional<HanyangSpan> span;  // empty: plain_rmse_2d
+  std::string warning;  // why the protocol asked for was not used ("" when it was)
+};
+
+/// The protocol for `choice` on `reference`: "a", "b" (the dataset's two spans), "auto" (the
+/// first of A, B whose gates the reference passes; whole run when none does), "none" (whole
+/// run), or a custom span START/END (parse_hanyang_span). A named span the reference does not
+/// fit falls back to the whole run with a warning naming why. Throws std::invalid_argument for
+/// a choice that is none of these.
+inline ScoringProtocol choose_protocol(std::string_view choice, std::span<const io::HanyangReferencePose> reference) {
+  ScoringProtocol p;
+  auto fits = [&](const char* name, const HanyangSpan& span) {
+    const SpanBounds b = find_span(reference, span);
+    if (!b.problem.empty()) return b.problem;
+    p.name = name;
+    p.span = span;
+    return std::string();
+  };
+  if (choice == "none") {
+    p.name = "whole_run";
+    return p;
+  }
+  if (choice == "auto") {
+    const std::string a = fits("trajectory_a", trajectory_a_span());
+    if (a.empty()) return p;
+    const std::string b = fits("trajectory_b", trajectory_b_span());
+    if (b.empty()) return p;
+    p.name = "whole_run";
+    p.warning = "span auto: neither of the dataset's spans fits the reference (trajectory A: " + a + "; trajectory B: " + b +
+                "): scored over the whole run";
+    return p;
+  }
+  HanyangSpan span;
+  const char* name = "custom";
+  if (choice == "a") {
+    span = trajectory_a_span();
+    name = "trajectory_a";
+  } else if (choice == "b") {
+    span = trajectory_b_span();
+    name = "trajectory_b";
+  } else if (const std::string e = parse_hanyang_span(choice, span); !e.empty()) {
+    throw std::invalid_argument("span '" + std::string(choice) + "': " + e);
+  }
+  if (const std::string problem = fits(name, span); !problem.empty()) {
+    p.name = "whole_run";
+    p.warning = "span " + std::string(choice) + ": " + problem + ": scored over the whole run";
+  }
+  return p;
+}
+
+/// Scores `estimates` with protocol `p` (its span, or the whole run).
+inline ProtocolRmse score_2d(std::span<const TimedPoint2> estimates, std::span<const io::HanyangReferencePose> reference,
+                             const ScoringProtocol& p, std::vector<double>* errors = nullptr) {
+  return p.span ? hanyang_rmse_2d(estimates, reference, *p.span, errors) : plain_rmse_2d(estimates, reference, errors);
+}
+
+/// A trajectory CSV: ours (time_ns, x, y, z; `ctxfuse run uwb --out`) or the authors' LS.csv /
+/// ESKF.csv (timestamp [ns], x, y, z); the time column is found by either name, x and y by
+/// name; stamps must not decrease.
 inline std::vector<TimedPoint2> read_hanyang_estimates(const std::filesystem::path& file_path) {
   io::TextFile file(file_path);
-  io::Header header;
-  const auto c = io::detail::header_columns<3>(file, header, {"timestamp", "x", "y"});
+  std::string_view line;
+  if (!file.next(line)) file.fail("empty file (no header)");
+  io::Header header(io::split_fields(line, io::Separator::comma));
+  std::array<std::size_t, 3> c{};
+  auto column = [&](std::initializer_list<std::string_view> names) {
+    for (std::size_t i = 0; i < header.size(); ++i)
+      for (std::string_view n : names)
+        if (io::detail::bare_column_name(io::trim(header.name(i))) == n) return i;
+    file.fail(io::cat("header has no column ", io::quote(*names.begin()),
+                      names.size() > 1 ? io::cat(" or ", io::quote(*(names.begin() + 1))) : std::string()));
+  };
+  c[0] = column({"timestamp", "time_ns"});
+  c[1] = column({"x"});
+  c[2] = column({"y"});
   io::Fields f(file.name(), &header);
   std::vector<TimedPoint2> out;
   while (io::next_fields(file, f, io::Separator::comma)) {

@@ -187,9 +187,66 @@ inline constexpr std::array<std::string_view, 17> kNlosUwbVariants{
     "least_squares",        // snapshot LS per epoch
     "motion_model_only"};   // the "IMU only" baseline: the motion model from the first fix
 
+/// Runs one variant of kNlosUwbVariants (by index) on `rs`. No reference is involved.
+inline pipelines::nlos_uwb::Track run_nlos_uwb_variant(std::size_t index, std::span<const io::UwbRange> rs,
+                                                       const pipelines::nlos_uwb::NlosClassifier& classifier,
+                                                       const pipelines::nlos_uwb::Settings& s) {
+  namespace nu = pipelines::nlos_uwb;
+  using Calibrated = nu::CalibratedRangeEkf<ChiSquareGate, false, nu::NlosClassifier::kMaxAnchors>;
+  using CalibratedLag = nu::CalibratedRangeEkf<ChiSquareGate, true, nu::NlosClassifier::kMaxAnchors>;
+  using Lagged = nu::RangeSmoother<10, ChiSquareGate, 9>;
+  switch (index) {
+    case 0: return nu::run(rs, nu::RangeEkf<>(s), nu::PaperEpochRule{}, classifier, s);
+    case 1: return nu::run(rs, nu::RangeEkf<>(s), nu::PerRangeRule{}, classifier, s);
+    case 2: return nu::run(rs, nu::RangeEkf<>(s), nu::NoNlosHandling{}, classifier, s);
+    case 3: return nu::run(rs, Calibrated(s), nu::PaperEpochRule{}, classifier, s);
+    case 4: return nu::run(rs, Calibrated(s), nu::PerRangeRule{}, classifier, s);
+    case 5: return nu::run(rs, Calibrated(s), nu::NoNlosHandling{}, classifier, s);
+    case 6: return nu::run(rs, CalibratedLag(s), nu::PaperEpochRule{}, classifier, s);
+    case 7: return nu::run(rs, CalibratedLag(s), nu::PerRangeRule{}, classifier, s);
+    case 8: return nu::run(rs, CalibratedLag(s), nu::NoNlosHandling{}, classifier, s);
+    case 9: return nu::run(rs, nu::RangeSmoother<>(s), nu::PaperEpochRule{}, classifier, s);
+    case 10: return nu::run(rs, nu::RangeSmoother<>(s), nu::NoNlosHandling{}, classifier, s);
+    case 11: return nu::run(rs, Lagged(s), nu::NoNlosHandling{}, classifier, s);
+    case 12: return nu::run(rs, Lagged(s), nu::PaperEpochRule{}, classifier, s);
+    case 13: return nu::run(rs, nu::RangeEkf<NoGate>(s), nu::PaperEpochRule{}, classifier, s);
+    case 14: return nu::run(rs, nu::RangeEkf<NoGate>(s), nu::NoNlosHandling{}, classifier, s);
+    case 15: return nu::least_squares_track(rs, s);
+    case 16: return nu::run(rs, nu::MotionModelOnly(s), nu::NoNlosHandling{}, classifier, s);
+    default: throw std::invalid_argument("no variant " + std::to_string(index));
+  }
+}
+
+/// Runs the variants named in `names` (every one of kNlosUwbVariants, in that order, when
+/// empty) on `rs` with `classifier`; nothing is scored (rmse NaN). Throws std::invalid_argument
+/// for an unknown name or settings that do not validate.
+inline std::vector<NlosUwbVariant> run_nlos_uwb_variants(std::span<const io::UwbRange> rs,
+                                                         const pipelines::nlos_uwb::NlosClassifier& classifier,
+                                                         const pipelines::nlos_uwb::Settings& s,
+                                                         std::span<const std::string_view> names = {}) {
+  if (const std::string problem = s.validate(); !problem.empty()) throw std::invalid_argument("settings: " + problem);
+  std::vector<NlosUwbVariant> out;
+  auto add = [&](std::size_t i) { out.push_back({std::string(kNlosUwbVariants[i]), run_nlos_uwb_variant(i, rs, classifier, s), {}}); };
+  if (names.empty())
+    for (std::size_t i = 0; i < kNlosUwbVariants.size(); ++i) add(i);
+  for (std::string_view n : names) {
+    const auto it = std::find(kNlosUwbVariants.begin(), kNlosUwbVariants.end(), n);
+    if (it == kNlosUwbVariants.end()) throw std::invalid_argument("no variant " + std::string(n));
+    add(static_cast<std::size_t>(it - kNlosUwbVariants.begin()));
+  }
+  return out;
+}
+
+/// Scores every variant against `reference` with protocol `p` (fills each one's rmse).
+inline void score_nlos_uwb_variants(std::vector<NlosUwbVariant>& variants, std::span<const io::HanyangReferencePose> reference,
+                                    const ScoringProtocol& p) {
+  for (auto& v : variants) v.rmse = score_2d(timed_points(v.track), reference, p);
+}
+
 /// Runs every variant on the case in `case_dir` with the SVM trained on `training_cases`
-/// (none: p1 absent, R = p2), and scores each against the case's reference. Throws
-/// std::invalid_argument when a training case is the scored one, io::ParseError on bad files.
+/// (none: p1 absent, R = p2), and scores each against the case's reference with the authors'
+/// protocol on `span`. Throws std::invalid_argument when a training case is the scored one or
+/// the reference does not fit the span, io::ParseError on bad files.
 inline NlosUwbCaseReport evaluate_nlos_uwb_case(const std::filesystem::path& case_dir,
                                                 std::span<const std::filesystem::path> training_cases,
                                                 const pipelines::nlos_uwb::Settings& s, const HanyangSpan& span) {
@@ -202,37 +259,17 @@ inline NlosUwbCaseReport evaluate_nlos_uwb_case(const std::filesystem::path& cas
       throw std::invalid_argument("the scored case " + case_dir.string() + " is among the SVM's training cases");
   const auto ranges = io::read_hanyang_uwb(case_dir).uwb_ranges();
   const auto ref = io::read_hanyang_reference(case_dir);
+  if (const SpanBounds b = find_span(ref, span); !b.problem.empty()) throw std::invalid_argument("hanyang_rmse_2d: " + b.problem);
   rep.training_cases.assign(training_cases.begin(), training_cases.end());
   std::optional<nu::NlosSvm> svm;
   if (!training_cases.empty()) svm = train_svm_on_cases(training_cases, s);
   rep.svm = svm.has_value();
   if (svm) rep.svm_gamma = svm->gamma;
-  const std::span<const io::UwbRange> rs(ranges);
-  const nu::NlosClassifier classifier(s, svm);
-  auto add = [&](std::string_view name, nu::Track t) {
-    const ProtocolRmse r = hanyang_rmse_2d(timed_points(t), ref, span);
-    rep.variants.push_back({std::string(name), std::move(t), r});
-  };
-  add(kNlosUwbVariants[0], nu::run(rs, nu::RangeEkf<>(s), nu::PaperEpochRule{}, classifier, s));
-  add(kNlosUwbVariants[1], nu::run(rs, nu::RangeEkf<>(s), nu::PerRangeRule{}, classifier, s));
-  add(kNlosUwbVariants[2], nu::run(rs, nu::RangeEkf<>(s), nu::NoNlosHandling{}, classifier, s));
-  using Calibrated = nu::CalibratedRangeEkf<>;
-  using CalibratedLag = nu::CalibratedRangeEkf<ChiSquareGate, true>;
-  add(kNlosUwbVariants[3], nu::run(rs, Calibrated(s), nu::PaperEpochRule{}, classifier, s));
-  add(kNlosUwbVariants[4], nu::run(rs, Calibrated(s), nu::PerRangeRule{}, classifier, s));
-  add(kNlosUwbVariants[5], nu::run(rs, Calibrated(s), nu::NoNlosHandling{}, classifier, s));
-  add(kNlosUwbVariants[6], nu::run(rs, CalibratedLag(s), nu::PaperEpochRule{}, classifier, s));
-  add(kNlosUwbVariants[7], nu::run(rs, CalibratedLag(s), nu::PerRangeRule{}, classifier, s));
-  add(kNlosUwbVariants[8], nu::run(rs, CalibratedLag(s), nu::NoNlosHandling{}, classifier, s));
-  using Lagged = nu::RangeSmoother<10, ChiSquareGate, 9>;
-  add(kNlosUwbVariants[9], nu::run(rs, nu::RangeSmoother<>(s), nu::PaperEpochRule{}, classifier, s));
-  add(kNlosUwbVariants[10], nu::run(rs, nu::RangeSmoother<>(s), nu::NoNlosHandling{}, classifier, s));
-  add(kNlosUwbVariants[11], nu::run(rs, Lagged(s), nu::NoNlosHandling{}, classifier, s));
-  add(kNlosUwbVariants[12], nu::run(rs, Lagged(s), nu::PaperEpochRule{}, classifier, s));
-  add(kNlosUwbVariants[13], nu::run(rs, nu::RangeEkf<NoGate>(s), nu::PaperEpochRule{}, classifier, s));
-  add(kNlosUwbVariants[14], nu::run(rs, nu::RangeEkf<NoGate>(s), nu::NoNlosHandling{}, classifier, s));
-  add(kNlosUwbVariants[15], nu::least_squares_track(rs, s));
-  add(kNlosUwbVariants[16], nu::run(rs, nu::MotionModelOnly(s), nu::NoNlosHandling{}, classifier, s));
+  rep.variants = run_nlos_uwb_variants(ranges, nu::NlosClassifier(s, svm), s);
+  ScoringProtocol p;
+  p.name = "custom";
+  p.span = span;
+  score_nlos_uwb_variants(rep.variants, ref, p);
   rep.identification = identification(rep.variants.front().track, ref, s);
   if (fs::exists(case_dir / "RMSD_results.txt")) rep.authors = read_hanyang_rmsd(case_dir / "RMSD_results.txt");
   return rep;

@@ -1,5 +1,7 @@
 // Fixed-lag Rauch-Tung-Striebel smoothing of a vector-state EKF: the smoothed mean a given lag
-// behind the newest update, from the last `Capacity` update records, with no allocation.
+// behind the newest update, from the last `capacity` update records. The capacity is a
+// runtime value (a lag in seconds holds as many records as the sensors' rates put in it), and
+// the ring is allocated once, by the constructor: nothing allocates after it.
 //
 // Forward, around ekf::predict / ekf::update (the same call pattern as filters/rts.hpp):
 //   lag.start(t0, belief);                                  // the first posterior
@@ -23,8 +25,9 @@
 
 #include <Eigen/Cholesky>
 
-#include <array>
+#include <algorithm>
 #include <cstddef>
+#include <vector>
 
 #include "ctxfuse/core/gaussian.hpp"
 #include "ctxfuse/core/numerics.hpp"
@@ -33,11 +36,15 @@
 
 namespace ctxfuse {
 
-template <int N, int Capacity>
+template <int N>
 class FixedLagRts {
-  static_assert(Capacity >= 2);
-
  public:
+  static constexpr int kDefaultCapacity = 64;
+  /// A window of `capacity` records (at least 2).
+  explicit FixedLagRts(int capacity = kDefaultCapacity)
+      : capacity_(std::max(2, capacity)), ring_(static_cast<std::size_t>(capacity_)) {}
+  int capacity() const { return capacity_; }
+
   struct Smoothed {
     double t = 0.0;
     Vector<N> mean = Vector<N>::Zero();
@@ -126,12 +133,12 @@ class FixedLagRts {
     SquareMatrix<N> gain = SquareMatrix<N>::Zero();  // C to the next record (set when it arrives)
   };
 
-  Record& at(int i) { return ring_[static_cast<std::size_t>((head_ + i) % Capacity)]; }
-  const Record& at(int i) const { return ring_[static_cast<std::size_t>((head_ + i) % Capacity)]; }
+  Record& at(int i) { return ring_[static_cast<std::size_t>((head_ + i) % capacity_)]; }
+  const Record& at(int i) const { return ring_[static_cast<std::size_t>((head_ + i) % capacity_)]; }
 
   void push(double t, const Vector<N>& prior_mean, const Vector<N>& mean) {
-    if (size_ == Capacity) {  // the oldest record leaves the window
-      head_ = (head_ + 1) % Capacity;
+    if (size_ == capacity_) {  // the oldest record leaves the window
+      head_ = (head_ + 1) % capacity_;
       --size_;
     }
     Record& r = at(size_++);
@@ -141,7 +148,8 @@ class FixedLagRts {
     r.gain.setZero();
   }
 
-  std::array<Record, Capacity> ring_{};
+  int capacity_;
+  std::vector<Record> ring_;
   int head_ = 0, size_ = 0;
   std::size_t revision_ = 0;
   SquareMatrix<N> last_cov_ = SquareMatrix<N>::Identity();  // the newest record's filtered covariance

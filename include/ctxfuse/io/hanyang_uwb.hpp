@@ -11,6 +11,7 @@
 // - The DW1000 reports -inf power when its estimate fails; such rows keep their range (the
 //   two-way time of flight is unaffected) with NaN RSSI, and are counted.
 // - Times must strictly increase within each file; the merge orders by time, then anchor id.
+// write_hanyang_case writes ranges and a reference in the same layout (simulated cases).
 #pragma once
 
 #include <ctxfuse/io/messages.hpp>
@@ -23,9 +24,13 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <map>
+#include <span>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -42,6 +47,7 @@ struct HanyangUwbCase {
   std::vector<HanyangRange> ranges;  // all anchors, time order
   std::map<int, std::size_t> ranges_per_anchor;
   std::size_t non_finite_rssi = 0;  // rows kept with NaN rssi and/or rssi_fp
+  std::size_t skipped_partial_last_lines = 0;  // a file's last line without its newline (cut short)
   std::vector<std::string> files;
 
   std::vector<UwbRange> uwb_ranges() const {
@@ -105,6 +111,11 @@ inline void read_hanyang_anchor_file(const std::filesystem::path& path, int anch
   std::int64_t previous = 0;
   std::size_t previous_line = 0, count = 0;
   while (next_fields(file, f, Separator::comma)) {
+    // A last line without its newline was cut short (a number cut short still parses).
+    if (!file.ended_by_newline()) {
+      ++out.skipped_partial_last_lines;
+      break;
+    }
     f.expect_count(header.size());
     HanyangRange r;
     r.t_ns = f.integer<std::int64_t>(c[0], 0, std::numeric_limits<std::int64_t>::max());
@@ -149,16 +160,17 @@ inline HanyangUwbCase read_hanyang_uwb(const std::filesystem::path& case_dir) {
   return out;
 }
 
-/// Reads the case's trajectory.csv (timestamp [ns, written as a float], x, y, z [m],
-/// heading [deg]): the reference, on the ranges' clock.
-inline std::vector<HanyangReferencePose> read_hanyang_reference(const std::filesystem::path& case_dir) {
-  TextFile file(case_dir / "trajectory.csv");
+/// Reads a Hanyang reference file (trajectory.csv: timestamp [ns, written as a float], x, y,
+/// z [m], heading [deg]): the reference, on the ranges' clock.
+inline std::vector<HanyangReferencePose> read_hanyang_reference_file(const std::filesystem::path& file_path) {
+  TextFile file(file_path);
   Header header;
   const auto c = detail::header_columns<5>(file, header, {"timestamp", "x", "y", "z", "heading_degrees"});
   Fields f(file.name(), &header);
   std::vector<HanyangReferencePose> out;
   std::size_t previous_line = 0;
   while (next_fields(file, f, Separator::comma)) {
+    if (!file.ended_by_newline()) break;  // a last line cut short (a number cut short still parses)
     f.expect_count(header.size());
     HanyangReferencePose p;
     p.t = f.real_in(c[0], 0.0, 1e19) * 1e-9;
@@ -170,6 +182,75 @@ inline std::vector<HanyangReferencePose> read_hanyang_reference(const std::files
     out.push_back(p);
   }
   return out;
+}
+
+/// The case's trajectory.csv (read_hanyang_reference_file).
+inline std::vector<HanyangReferencePose> read_hanyang_reference(const std::filesystem::path& case_dir) {
+  return read_hanyang_reference_file(case_dir / "trajectory.csv");
+}
+
+/// Writes a case folder in the dataset's layout, so that read_hanyang_uwb and
+/// read_hanyang_reference read it back: one A<id>.csv per anchor (the rosbag export's columns
+/// %time, field.stamp (the same stamp), field.id, field.x/y/z, field.distanceFromTag,
+/// field.rssi, field.rssi_fp; unknown powers as -inf, as the DW1000 reports them) and, when
+/// `reference` is not empty, trajectory.csv. Stamps are written in ns (t rounded to the ns).
+/// Creates `dir` if needed. Throws std::invalid_argument for ranges the reader would refuse
+/// (non-finite or negative times, ranges outside [0, 1000] m, times that do not increase within
+/// an anchor, an anchor whose position changes) before writing anything, std::runtime_error
+/// when a file cannot be written.
+inline void write_hanyang_case(const std::filesystem::path& dir, std::span<const UwbRange> ranges,
+                               std::span<const HanyangReferencePose> reference = {}) {
+  namespace fs = std::filesystem;
+  std::map<int, std::vector<const UwbRange*>> by_anchor;
+  for (const auto& r : ranges) {
+    if (!(std::isfinite(r.t) && r.t >= 0.0 && r.t < 9.2e9)) throw std::invalid_argument(cat("write_hanyang_case: time ", r.t, " s"));
+    if (!(r.range_m >= 0.0 && r.range_m <= 1000.0)) throw std::invalid_argument(cat("write_hanyang_case: range ", r.range_m, " m"));
+    if (!r.anchor_position.allFinite() || (r.anchor_position.array().abs() > 1e5).any())
+      throw std::invalid_argument(cat("write_hanyang_case: anchor ", r.anchor_id, " position not finite or beyond 1e5 m"));
+    if (r.anchor_id < 0 || r.anchor_id > 1'000'000) throw std::invalid_argument(cat("write_hanyang_case: anchor id ", r.anchor_id));
+    auto& list = by_anchor[r.anchor_id];
+    if (!list.empty()) {
+      if (std::llround(r.t * 1e9) <= std::llround(list.back()->t * 1e9))
+        throw std::invalid_argument(cat("write_hanyang_case: anchor ", r.anchor_id, " time ", r.t, " s not after the previous one"));
+      if (r.anchor_position != list.front()->anchor_position)
+        throw std::invalid_argument(cat("write_hanyang_case: anchor ", r.anchor_id, " moves"));
+    }
+    list.push_back(&r);
+  }
+  for (std::size_t i = 1; i < reference.size(); ++i)
+    if (!(reference[i].t > reference[i - 1].t)) throw std::invalid_argument("write_hanyang_case: reference times must increase");
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (!fs::is_directory(dir)) throw std::runtime_error("write_hanyang_case: cannot create " + dir.string());
+  auto power = [](double v, char* buf, std::size_t n) {
+    if (std::isfinite(v)) std::snprintf(buf, n, "%.17g", v);
+    else std::snprintf(buf, n, "-inf");
+  };
+  char line[512], rssi[40], fp[40];
+  for (const auto& [id, list] : by_anchor) {
+    const fs::path path = dir / cat('A', id, ".csv");
+    std::ofstream os(path);
+    os << "%time,field.stamp,field.id,field.x,field.y,field.z,field.distanceFromTag,field.rssi,field.rssi_fp\n";
+    for (const UwbRange* r : list) {
+      const long long t_ns = std::llround(r->t * 1e9);
+      power(r->rssi_dbm, rssi, sizeof rssi);
+      power(r->rssi_first_path_dbm, fp, sizeof fp);
+      std::snprintf(line, sizeof line, "%lld,%lld,%d,%.17g,%.17g,%.17g,%.17g,%s,%s\n", t_ns, t_ns, id, r->anchor_position.x(),
+                    r->anchor_position.y(), r->anchor_position.z(), r->range_m, rssi, fp);
+      os << line;
+    }
+    if (!os.flush()) throw std::runtime_error("write_hanyang_case: cannot write " + path.string());
+  }
+  if (reference.empty()) return;
+  const fs::path path = dir / "trajectory.csv";
+  std::ofstream os(path);
+  os << "timestamp,x,y,z,heading_degrees\n";
+  for (const auto& p : reference) {
+    std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g,%.17g,%.17g\n", static_cast<double>(std::llround(p.t * 1e9)), p.position.x(),
+                  p.position.y(), p.position.z(), p.heading_deg);
+    os << line;
+  }
+  if (!os.flush()) throw std::runtime_error("write_hanyang_case: cannot write " + path.string());
 }
 
 }  // namespace ctxfuse::io

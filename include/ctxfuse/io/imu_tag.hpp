@@ -1,36 +1,40 @@
-// Reader of an IMU csv logged by RTKLIB's str2str with its binary time-tag file (.tag), and
-// the mapping of the IMU's own millisecond ticks to GPS time.
+// Reader of an IMU csv logged by RTKLIB's str2str with its binary time-tag file (.tag,
+// io/time_tag.hpp), and the mapping of the IMU's own millisecond ticks to GPS time.
 //
 // - csv: 7 fields a line, accel x,y,z [g], gyro x,y,z [deg/s], tick [ms of the IMU's clock],
 //   no header. A logger started or stopped mid-line leaves a partial first or last line. The
 //   first line is skipped when it is not a whole record; the last line also when it has no
 //   newline, since a cut tick ("81049" for "810496") still parses. Both are counted. Anywhere
 //   else a bad line is an error: it would mean the file is damaged, not cut.
-// - tag: a 60-byte header starting "TIMETAG RTKLIB", a uint32 (the data README calls it a
-//   time-zone flag; the mapping does not use it), the start time as uint32 seconds plus a
-//   double fraction, both GPS time on RTKLIB's 1970-based scale, then (uint32 PC tick [ms]
-//   since the start, uint32 byte offset in the csv) records; all little-endian.
-// - Time: the csv's first kept record is the tag's start time, and IMU ticks are scaled so
+// - Time (ImuClock): the csv's first kept record is the tag's start time. Ticks are scaled so
 //   that the csv's first-to-last tick span equals the last tag record's PC tick, which corrects
-//   the IMU clock's rate against the PC's. The byte offsets are not used: they count the
-//   logger's own line endings, which a copied csv need not keep.
+//   the IMU clock's rate against the PC's, when that scale is one two clocks can have (see
+//   ImuClock). Otherwise one of the files is cut short (or they do not belong together): the
+//   ticks are then taken at their nominal 1 ms from the start time, or refused on request, and
+//   ImuTimeMapping says which and why.
+// - The tag's byte offsets are not used for time: they count the logger's own line endings,
+//   which a copied csv need not keep (the drive's csv has LF, its tag counts CRLF), so they
+//   place a byte of the csv only to within one byte a line, about 2 % of the file. They are
+//   used to say which file is cut.
+// - Writing: write_imu_csv_and_tag writes both files in the layout read here (imu_tag_write.hpp).
 #pragma once
 
 #include <ctxfuse/io/messages.hpp>
 #include <ctxfuse/io/text.hpp>
+#include <ctxfuse/io/time_tag.hpp>
 
 #include <Eigen/Core>
 
-#include <bit>
+#include <charconv>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <limits>
 #include <numbers>
 #include <string>
 #include <string_view>
+#include <system_error>
 #include <vector>
 
 namespace ctxfuse::io {
@@ -47,6 +51,8 @@ struct ImuCsvLog {
   std::vector<ImuCsvRecord> records;
   bool skipped_first_line = false;
   bool skipped_last_line = false;
+  std::uint64_t bytes = 0;  // size of the file
+  std::size_t lines = 0;    // lines in the file, blank ones and a last one without newline included
   std::size_t skipped_lines() const { return std::size_t{skipped_first_line} + std::size_t{skipped_last_line}; }
 };
 
@@ -107,89 +113,138 @@ inline ImuCsvLog read_imu_csv(const std::filesystem::path& path) {
     have_pending = true;
   }
   if (have_pending) take(true);
+  log.lines = file.line_number();
+  std::error_code ec;
+  log.bytes = std::filesystem::file_size(path, ec);
+  if (ec) log.bytes = 0;
   return log;
 }
 
-struct TimeTagRecord {
-  std::uint32_t tick_ms = 0;      // PC clock since the start
-  std::uint32_t byte_offset = 0;  // in the csv as the logger wrote it
+/// Frequency error allowed to each of the two clocks compared (the IMU's oscillator and the
+/// logging PC's millisecond tick). Quartz crystals are specified at +-10 to +-50 ppm at 25 C,
+/// with about as much again over an industrial temperature range and a few ppm a year of
+/// ageing; typical parts agree within a few tens of ppm. 100 ppm bounds a cheap part over
+/// temperature, so two clocks differ by at most 200 ppm.
+inline constexpr double kClockTolerancePpm = 100.0;
+
+/// How the ticks of one csv were mapped to GPS time, for the caller to print or log.
+struct ImuTimeMapping {
+  enum class Method { scaled, nominal };
+  Method method = Method::scaled;
+  double seconds_per_tick = 1e-3;  // used: the fit (scaled) or 1 ms (nominal)
+  double scale_ppm = 0.0;          // the fit's rate error, (fit / 1 ms - 1) * 1e6, used or not
+  double tolerance_ppm = 0.0;      // the largest |scale_ppm| taken as a clock's
+  double csv_span_s = 0.0;         // first to last kept tick, at 1 ms a tick
+  double tag_span_s = 0.0;         // the last tag record's tick
+  std::uint64_t csv_bytes = 0;
+  std::size_t csv_lines = 0;
+  std::uint32_t tag_last_offset = 0;  // bytes of logged data the tag accounts for
+  std::string why;                    // one sentence: the figures and the conclusion
 };
 
-struct TimeTag {
-  std::string file;
-  std::uint32_t header_word = 0;  // the uint32 after the 60-byte header (unused)
-  std::uint32_t start_s = 0;      // GPST seconds since 1970, no leap seconds
-  double start_fraction_s = 0.0;
-  std::vector<TimeTagRecord> records;
-  double start_time() const { return static_cast<double>(start_s) + start_fraction_s; }
-};
+inline const char* to_string(ImuTimeMapping::Method m) { return m == ImuTimeMapping::Method::scaled ? "scaled" : "nominal"; }
 
-inline constexpr std::string_view kTimeTagMagic = "TIMETAG RTKLIB";
-inline constexpr std::size_t kTimeTagHeaderBytes = 60;
-inline constexpr std::size_t kTimeTagPreambleBytes = kTimeTagHeaderBytes + 4 + 4 + 8;
+/// What ImuClock does with a tick scale no pair of clocks has.
+enum class ImplausibleTickScale { use_nominal, refuse };
 
 namespace detail {
-inline std::uint64_t little_endian(const unsigned char* p, int bytes) {
-  std::uint64_t v = 0;
-  for (int i = bytes - 1; i >= 0; --i) v = (v << 8) | p[i];
-  return v;
+/// v with `decimals` digits after the point, for messages.
+inline std::string fixed(double v, int decimals) {
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed, decimals);
+  return std::string(buf, r.ptr);
+}
+
+/// What the byte counts add. The logger may have written CRLF where the copy has LF or the
+/// reverse, so the logged size is known only to within the csv's bytes +- its lines.
+inline std::string byte_evidence(const ImuTimeMapping& m) {
+  if (m.csv_bytes == 0) return "the csv's size is unknown";
+  const auto lo = m.csv_bytes > m.csv_lines ? m.csv_bytes - m.csv_lines : 0, hi = m.csv_bytes + m.csv_lines;
+  const std::string counts = cat("the tag accounts for ", m.tag_last_offset, " bytes of logged data, the csv has ",
+                                 m.csv_bytes, " bytes in ", m.csv_lines, " lines (", lo, " to ", hi,
+                                 " with either line ending)");
+  if (m.tag_last_offset > hi) return counts + ": the csv is cut short";
+  if (m.tag_last_offset < lo) return counts + ": the tag is cut short";
+  return counts + ": the sizes agree to within the line endings";
 }
 }  // namespace detail
 
-inline TimeTag read_time_tag(const std::filesystem::path& path) {
-  TimeTag tag;
-  tag.file = path.string();
-  auto fail = [&](std::string reason) { throw ParseError(tag.file, 0, 0, "", std::move(reason)); };
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail("cannot open file");
-  const std::vector<unsigned char> b{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  if (b.size() < kTimeTagPreambleBytes)
-    fail(cat("file too short: ", b.size(), " bytes, a time-tag file starts with ", kTimeTagPreambleBytes,
-             " (60-byte header, flag, start time)"));
-  if (std::string_view(reinterpret_cast<const char*>(b.data()), kTimeTagMagic.size()) != kTimeTagMagic)
-    fail("header does not start with \"TIMETAG RTKLIB\": not an RTKLIB time-tag file");
-  const unsigned char* p = b.data() + kTimeTagHeaderBytes;
-  tag.header_word = static_cast<std::uint32_t>(detail::little_endian(p, 4));
-  tag.start_s = static_cast<std::uint32_t>(detail::little_endian(p + 4, 4));
-  tag.start_fraction_s = std::bit_cast<double>(detail::little_endian(p + 8, 8));
-  if (!(tag.start_fraction_s >= 0.0 && tag.start_fraction_s < 1.0))
-    fail(cat("start-time fraction ", tag.start_fraction_s, " outside [0, 1) s"));
-  const std::size_t body = b.size() - kTimeTagPreambleBytes;
-  if (body % 8 != 0)
-    fail(cat("truncated: the last record has ", body % 8, " of its 8 bytes (file size ", b.size(), ")"));
-  if (body == 0) fail("no tick records after the header");
-  tag.records.reserve(body / 8);
-  for (std::size_t off = kTimeTagPreambleBytes; off < b.size(); off += 8) {
-    const TimeTagRecord r{static_cast<std::uint32_t>(detail::little_endian(b.data() + off, 4)),
-                          static_cast<std::uint32_t>(detail::little_endian(b.data() + off + 4, 4))};
-    if (!tag.records.empty() && (r.tick_ms < tag.records.back().tick_ms || r.byte_offset < tag.records.back().byte_offset))
-      fail(cat("record at byte ", off, " goes backwards (tick ", r.tick_ms, ", offset ", r.byte_offset, ")"));
-    tag.records.push_back(r);
-  }
-  return tag;
-}
-
-/// IMU tick -> GPST seconds since 1970, as the data README specifies (see the file comment).
+/// IMU tick -> GPST seconds since 1970 (see the file comment).
+///
+/// The scale fit compares two spans: the csv's ticks, first to last kept record, and the tag's
+/// last PC tick. Beside the two clocks' rate difference (at most 2 * kClockTolerancePpm), the
+/// fit absorbs the logger's latency at both ends: the first record reached the PC by the first
+/// tag record's tick, not at the start time, and the last record up to one tag step before the
+/// last tag tick; a partial line skipped at either end shifts the span by one IMU step more.
+/// The fit is used when |tag span - csv span| is within the sum of those bounds. The drive in
+/// shared/data fits at +257 ppm, almost all of it its 0.131 s start latency over 549 s, against
+/// a bound of about 500 ppm; its csv cut at 1 MB would need a scale of 2.5.
 class ImuClock {
  public:
-  ImuClock(const ImuCsvLog& log, const TimeTag& tag) {
+  ImuClock(const ImuCsvLog& log, const TimeTag& tag, ImplausibleTickScale policy = ImplausibleTickScale::use_nominal) {
     if (log.records.size() < 2) throw ParseError(log.file, 0, 0, "", "fewer than 2 records: no tick span to scale");
+    if (tag.records.empty()) throw ParseError(tag.file, 0, 0, "", "no tick records");
     const double last_tag_s = tag.records.back().tick_ms / 1000.0;
     if (!(last_tag_s > 0.0)) throw ParseError(tag.file, 0, 0, "", "last tick record is 0 ms: no span to scale to");
     start_ = tag.start_time();
     first_tick_ = log.records.front().tick_ms;
-    seconds_per_tick_ = last_tag_s / static_cast<double>(log.records.back().tick_ms - first_tick_);
+    const auto ticks = static_cast<double>(log.records.back().tick_ms - first_tick_);
+    const double fit = last_tag_s / ticks;
+
+    auto& m = mapping_;
+    m.csv_span_s = ticks / 1000.0;
+    m.tag_span_s = last_tag_s;
+    m.scale_ppm = (fit / 1e-3 - 1.0) * 1e6;
+    m.csv_bytes = log.bytes;
+    m.csv_lines = log.lines;
+    m.tag_last_offset = tag.records.back().byte_offset;
+    const std::size_t n = tag.records.size();
+    const double first_latency_s = tag.records.front().tick_ms / 1000.0;
+    const double last_step_s = n > 1 ? (tag.records[n - 1].tick_ms - tag.records[n - 2].tick_ms) / 1000.0 : 0.0;
+    const double imu_step_s = m.csv_span_s / static_cast<double>(log.records.size() - 1);
+    const double latency_s = first_latency_s + last_step_s + 2.0 * imu_step_s;
+    const double tolerance_s = 2.0 * kClockTolerancePpm * 1e-6 * m.csv_span_s + latency_s;
+    m.tolerance_ppm = tolerance_s / m.csv_span_s * 1e6;
+    const bool plausible = std::abs(last_tag_s - m.csv_span_s) <= tolerance_s;
+
+    std::string figures = cat("csv ticks span ", detail::fixed(m.csv_span_s, 3), " s, the tag ",
+                              detail::fixed(last_tag_s, 3), " s: scale ", detail::fixed(m.scale_ppm, 1),
+                              " ppm against a bound of ", detail::fixed(m.tolerance_ppm, 1),
+                              " ppm (two clocks at ", kClockTolerancePpm, " ppm, latency ", detail::fixed(latency_s, 3),
+                              " s)");
+    if (tag.partial_record_bytes)
+      figures += cat("; the tag's last record was cut (", tag.partial_record_bytes, " of 8 bytes, dropped)");
+    if (plausible) {
+      m.method = ImuTimeMapping::Method::scaled;
+      m.seconds_per_tick = fit;
+      m.why = figures + ": ticks scaled to the tag";
+    } else {
+      m.method = ImuTimeMapping::Method::nominal;
+      m.seconds_per_tick = 1e-3;
+      const double gap_s = last_tag_s - m.csv_span_s;
+      m.why = cat(figures, ", a scale no clock has: ",
+                  gap_s > 0.0 ? cat("the csv ends ", detail::fixed(gap_s, 3), " s before the tag")
+                              : cat("the tag ends ", detail::fixed(-gap_s, 3), " s before the csv"),
+                  "; ", detail::byte_evidence(m), ". ");
+      if (policy == ImplausibleTickScale::refuse)
+        throw ParseError(log.file, 0, 0, "", m.why + "Refused (the csv and its tag " + tag.file + " do not agree)");
+      m.why += "Ticks taken at the nominal 1 ms from the tag's start time";
+    }
+    seconds_per_tick_ = m.seconds_per_tick;
   }
   double operator()(std::int64_t tick_ms) const {
     return start_ + static_cast<double>(tick_ms - first_tick_) * seconds_per_tick_;
   }
-  /// Seconds of GPS time per IMU millisecond tick (1e-3 for clocks that agree).
+  /// Seconds of GPS time per IMU millisecond tick (1e-3 for clocks that agree, and when the
+  /// nominal mapping is used).
   double seconds_per_tick() const { return seconds_per_tick_; }
+  const ImuTimeMapping& mapping() const { return mapping_; }
 
  private:
   double start_ = 0.0;
   std::int64_t first_tick_ = 0;
   double seconds_per_tick_ = 0.0;
+  ImuTimeMapping mapping_;
 };
 
 struct ImuConversion {
@@ -197,11 +252,15 @@ struct ImuConversion {
   /// its drive); zero by default so that no recording's figure is assumed for another.
   double delay_s = 0.0;
   double g_mps2 = 9.80665;  // standard gravity: the unit the csv's accelerations are in
+  ImplausibleTickScale implausible_scale = ImplausibleTickScale::use_nominal;
 };
 
-/// Samples in SI units in the IMU's axes (rad/s, m/s^2), rates not increments.
-inline std::vector<ImuSample> to_imu_samples(const ImuCsvLog& log, const TimeTag& tag, const ImuConversion& opt = {}) {
-  const ImuClock clock(log, tag);
+/// Samples in SI units in the IMU's axes (rad/s, m/s^2), rates not increments. `mapping`,
+/// when given, receives how the ticks were mapped to time.
+inline std::vector<ImuSample> to_imu_samples(const ImuCsvLog& log, const TimeTag& tag, const ImuConversion& opt = {},
+                                             ImuTimeMapping* mapping = nullptr) {
+  const ImuClock clock(log, tag, opt.implausible_scale);
+  if (mapping) *mapping = clock.mapping();
   constexpr double rad_per_deg = std::numbers::pi / 180.0;
   std::vector<ImuSample> out;
   out.reserve(log.records.size());
@@ -216,3 +275,5 @@ inline std::vector<ImuSample> to_imu_samples(const ImuCsvLog& log, const TimeTag
 }
 
 }  // namespace ctxfuse::io
+
+#include <ctxfuse/io/imu_tag_write.hpp>

@@ -13,6 +13,8 @@
 // fields, text that is not a number, non-finite values, time that does not increase, and a
 // field above 1000 uT in magnitude (the Earth's is 25-65 uT; a thousand is a unit error, e.g.
 // nanotesla or gauss*1e3, or a magnet on the sensor, not a field to take a heading from).
+// A last data line without a newline is not trusted (a cut "40.8" reads as "40."): it is
+// skipped and counted in MagCsvReadStats.
 #pragma once
 
 #include <ctxfuse/io/messages.hpp>
@@ -27,7 +29,11 @@ namespace ctxfuse::io {
 inline constexpr std::string_view kMagCsvHeader = "t,mag_x,mag_y,mag_z";
 inline constexpr double kMagCsvMaxFieldUt = 1000.0;
 
-inline std::vector<MagSample> read_mag_csv(const std::filesystem::path& path) {
+struct MagCsvReadStats {
+  bool skipped_partial_last_line = false;
+};
+
+inline std::vector<MagSample> read_mag_csv(const std::filesystem::path& path, MagCsvReadStats* stats = nullptr) {
   TextFile file(path);
   Fields f(file.name());
   std::vector<MagSample> out;
@@ -39,6 +45,10 @@ inline std::vector<MagSample> read_mag_csv(const std::filesystem::path& path) {
       if (trim(line) != kMagCsvHeader) file.fail(cat("expected the header '", kMagCsvHeader, "'"));
       header = true;
       continue;
+    }
+    if (!file.ended_by_newline()) {
+      if (stats) stats->skipped_partial_last_line = true;
+      break;
     }
     f.split(line, file.line_number(), Separator::comma);
     f.expect_count(4);

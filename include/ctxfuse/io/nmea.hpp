@@ -12,6 +12,10 @@
 //   reader keeps the L1-band signal (GPS/GLONASS/BeiDou/QZSS id 1, Galileo id 7 = E1) and
 //   treats sentences without a signal id as L1. A satellite without elevation or azimuth is
 //   skipped (counted); an empty SNR means "in view, not tracked" (NaN).
+// - A log cut short: the last epoch is dropped (stats.dropped_incomplete_last_epoch) when it
+//   may be incomplete: its GSV sequence stops before its last sentence ("2 of 3"), or the file
+//   ends inside a sentence (no newline) not shown to start a new epoch. A cut exactly between
+//   two whole sentences cannot be seen; the epoch keeps the sentences it has.
 #pragma once
 
 #include <ctxfuse/io/text.hpp>
@@ -75,6 +79,7 @@ struct NmeaStats {
   std::size_t malformed = 0;
   std::size_t ignored = 0;  // valid sentences of types not used here (VTG, TXT, ...)
   std::size_t satellites_without_geometry = 0;
+  bool dropped_incomplete_last_epoch = false;
   std::vector<NmeaProblem> first_problems;  // at most kMaxProblems
   static constexpr std::size_t kMaxProblems = 20;
 };
@@ -146,11 +151,13 @@ class Reader {
  public:
   NmeaLog log;
 
-  void line(std::string_view text, std::size_t line_number) {
+  /// `complete`: false for a last line without newline; one that fails its checksum is cut.
+  void line(std::string_view text, std::size_t line_number, bool complete = true) {
     ++log.stats.lines;
     while (!text.empty() && (text.back() == '\r' || text.back() == '\n' || text.back() == ' ')) text.remove_suffix(1);
     if (text.empty()) return;
     line_no_ = line_number;
+    if (!complete && !checksum_ok(text)) cut_in_current_epoch_ = cut_line_is_current_epoch(text);
     if (!checksum_ok(text)) {
       ++log.stats.checksum_failures;
       problem("bad or missing checksum");
@@ -187,7 +194,13 @@ class Reader {
   }
 
   NmeaLog finish() {
-    if (has_current_) log.epochs.push_back(std::move(current_));
+    if (has_current_ && (gsv_pending_ || cut_in_current_epoch_)) {
+      log.stats.dropped_incomplete_last_epoch = true;
+      problem(gsv_pending_ ? "the log ends inside the last epoch's GSV sequence: epoch dropped"
+                           : "the log ends inside a sentence of the last epoch: epoch dropped");
+    } else if (has_current_) {
+      log.epochs.push_back(std::move(current_));
+    }
     has_current_ = false;
     return std::move(log);
   }
@@ -204,6 +217,21 @@ class Reader {
     return false;
   }
 
+  /// Whether a cut sentence may belong to the current epoch: yes unless it is shown to start
+  /// a new one, a time-bearing sentence whose time (followed by the next field, since a time
+  /// cut to "0214" parses as another) differs from the epoch's.
+  bool cut_line_is_current_epoch(std::string_view text) const {
+    if (!has_current_) return false;
+    const auto f = io::split_fields(text.substr(1), io::Separator::comma);
+    const auto type = f[0].size() == 5 ? f[0].substr(2) : std::string_view();
+    const std::size_t time_field = type == "GLL" ? 5 : 1;
+    double tod = 0.0;
+    if ((type != "GGA" && type != "RMC" && type != "GLL") || f.size() <= time_field + 1 ||
+        !parse_time_of_day(f[time_field], tod))
+      return true;
+    return std::abs(day_offset_ + tod - current_.time_s) <= 1e-3;
+  }
+
   NmeaEpoch& epoch_for_time(double tod) {
     if (std::isfinite(last_tod_) && tod < last_tod_ - 43200.0) day_offset_ += 86400.0;
     last_tod_ = tod;
@@ -212,6 +240,7 @@ class Reader {
       current_.time_s = t;
     } else if (!has_current_ || std::abs(current_.time_s - t) > 1e-3) {
       if (has_current_) log.epochs.push_back(std::move(current_));
+      gsv_pending_ = false;
       current_ = NmeaEpoch{};
       current_.time_s = t;
       has_current_ = true;
@@ -286,6 +315,7 @@ class Reader {
     if (!parse_int(f[1], total)) return fail("GSV", "number of messages", f, 1);
     if (!parse_int(f[2], number)) return fail("GSV", "message number", f, 2);
     if (!parse_int(f[3], in_view)) return fail("GSV", "satellites in view", f, 3);
+    gsv_pending_ = number < total;
     const GnssSystem system = system_of_talker(talker);
     if (rest % 4 == 1) {
       unsigned signal = 0;
@@ -330,6 +360,8 @@ class Reader {
 
   NmeaEpoch current_;
   bool has_current_ = false;
+  bool gsv_pending_ = false;           // the last GSV was not the last of its sequence
+  bool cut_in_current_epoch_ = false;  // the file ends inside a sentence of the current epoch
   double day_offset_ = 0.0;
   double last_tod_ = std::numeric_limits<double>::quiet_NaN();
   std::size_t line_no_ = 0;
@@ -341,7 +373,7 @@ inline NmeaLog parse_nmea(std::istream& in) {
   detail::Reader reader;
   std::string line;
   std::size_t n = 0;
-  while (std::getline(in, line)) reader.line(line, ++n);
+  while (std::getline(in, line)) reader.line(line, ++n, !in.eof());
   return reader.finish();
 }
 

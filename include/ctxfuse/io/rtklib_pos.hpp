@@ -12,6 +12,11 @@
 // - RTKLIB writes each covariance term c as sign(c) * sqrt(|c|) (sdn, sdne, ...); records keep
 //   the file's values and to_gnss_fix squares them back with their signs.
 // - Epochs must strictly increase; anything malformed throws ParseError (file:line:column).
+// - A last line without a newline is not trusted: a copy cut inside a number still parses
+//   ("1601.47" for "1601.4740000"), so it is skipped and counted (skipped_partial_last_line).
+// - write_rtklib_pos writes the same format with every column: RTKLIB's widths and decimals
+//   (time to the ms, lat/lon 9 decimals [deg], height 4 [m], sd 4 [m], age 2 [s], ratio 1,
+//   velocities 5 [m/s] and their sd 5); a file the reader takes back unchanged to those digits.
 #pragma once
 
 #include <ctxfuse/io/messages.hpp>
@@ -22,7 +27,11 @@
 #include <chrono>
 #include <cmath>
 #include <cstddef>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <span>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -53,6 +62,7 @@ struct RtklibPosRecord {
 struct RtklibPosFile {
   std::vector<RtklibPosRecord> records;
   std::vector<std::string> columns;  // the header's names after the two GPST fields
+  bool skipped_partial_last_line = false;  // a data line without newline at the end of the file
 };
 
 namespace detail {
@@ -150,6 +160,10 @@ inline RtklibPosFile read_rtklib_pos(const std::filesystem::path& path) {
       continue;
     }
     if (!have_header) file.fail("data before the '%  GPST ...' column header");
+    if (!file.ended_by_newline()) {
+      out.skipped_partial_last_line = true;
+      break;
+    }
     f.split(line, file.line_number(), Separator::whitespace);
     f.expect_count(header.size());
     RtklibPosRecord r;
@@ -210,6 +224,125 @@ inline std::vector<GnssFix> to_gnss_fixes(const RtklibPosFile& file) {
   out.reserve(file.records.size());
   for (const auto& r : file.records) out.push_back(to_gnss_fix(r));
   return out;
+}
+
+// ---- writer ----
+
+struct RtklibPosWriteOptions {
+  bool velocity = true;               // the vn ... sdvun columns (RTKLIB writes them on request)
+  std::vector<std::string> comments;  // written as "% text" lines before the column header
+};
+
+/// The fix as an epoch of a .pos file: the inverse of to_gnss_fix. The fix must be geodetic
+/// (degrees); age and ratio, which a GnssFix does not carry, are 0.
+inline RtklibPosRecord to_rtklib_pos_record(const GnssFix& fix) {
+  if (fix.frame != PositionFrame::geodetic)
+    throw std::invalid_argument("to_rtklib_pos_record: the fix is not geodetic (lat/lon/height)");
+  auto root = [](double c) { return std::copysign(std::sqrt(std::abs(c)), c); };
+  RtklibPosRecord r;
+  r.t = fix.t;
+  r.latitude_deg = fix.position.x();
+  r.longitude_deg = fix.position.y();
+  r.height_m = fix.position.z();
+  r.q = static_cast<int>(fix.quality);
+  r.ns = fix.satellites_used;
+  r.sde_m = std::sqrt(fix.cov(0, 0));
+  r.sdn_m = std::sqrt(fix.cov(1, 1));
+  r.sdu_m = std::sqrt(fix.cov(2, 2));
+  r.sdne_m = root(fix.cov(0, 1));
+  r.sdeu_m = root(fix.cov(0, 2));
+  r.sdun_m = root(fix.cov(1, 2));
+  r.age_s = 0.0;
+  r.ratio = 0.0;
+  if (fix.velocity) {
+    r.ve_mps = fix.velocity->x();
+    r.vn_mps = fix.velocity->y();
+    r.vu_mps = fix.velocity->z();
+    r.sdve_mps = std::sqrt(fix.velocity_cov(0, 0));
+    r.sdvn_mps = std::sqrt(fix.velocity_cov(1, 1));
+    r.sdvu_mps = std::sqrt(fix.velocity_cov(2, 2));
+    r.sdvne_mps = root(fix.velocity_cov(0, 1));
+    r.sdveu_mps = root(fix.velocity_cov(0, 2));
+    r.sdvun_mps = root(fix.velocity_cov(1, 2));
+  }
+  return r;
+}
+
+namespace detail {
+/// "yyyy/mm/dd hh:mm:ss.sss" of seconds since 1970 already rounded to whole milliseconds.
+inline std::string calendar_time(long long ms) {
+  constexpr long long ms_per_day = 86'400'000;
+  const long long days = ms / ms_per_day, in_day = ms % ms_per_day;  // ms >= 0
+  const std::chrono::year_month_day ymd{std::chrono::sys_days{std::chrono::days{days}}};
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%04d/%02u/%02u %02lld:%02lld:%02lld.%03lld", static_cast<int>(ymd.year()),
+                static_cast<unsigned>(ymd.month()), static_cast<unsigned>(ymd.day()), in_day / 3'600'000,
+                in_day / 60'000 % 60, in_day / 1000 % 60, in_day % 1000);
+  return buf;
+}
+}  // namespace detail
+
+/// Writes `records` (time order, strictly increasing at the millisecond) as an RTKLIB .pos
+/// file in GPST with every column (see the file comment for the digits kept). Throws
+/// std::invalid_argument, before writing, for a value the reader would refuse (non-finite,
+/// outside its bounds, a time outside 1980-2200 or not after the previous one at 1 ms);
+/// std::runtime_error when the file cannot be written.
+inline void write_rtklib_pos(const std::filesystem::path& path, std::span<const RtklibPosRecord> records,
+                             const RtklibPosWriteOptions& opt = {}) {
+  auto bad = [](std::size_t i, std::string what) {
+    throw std::invalid_argument(cat("write_rtklib_pos: record ", i, ": ", what));
+  };
+  std::string text;
+  for (const auto& c : opt.comments) text += "% " + c + "\n";
+  text += "%  GPST                  latitude(deg) longitude(deg)  height(m)   Q  ns   sdn(m)   sde(m)   sdu(m)  sdne(m)"
+          "  sdeu(m)  sdun(m) age(s)  ratio";
+  if (opt.velocity) text += "    vn(m/s)    ve(m/s)    vu(m/s)      sdvn      sdve      sdvu     sdvne     sdveu     sdvun";
+  text += '\n';
+  constexpr double first_ms = 315'532'800'000.0, end_ms = 7'258'118'400'000.0;  // 1980-01-01, 2200-01-01
+  long long previous_ms = -1;
+  char buf[512];
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    const auto& r = records[i];
+    if (!(std::isfinite(r.t) && r.t * 1000.0 >= first_ms && r.t * 1000.0 < end_ms)) bad(i, cat("time ", r.t, " s outside 1980-2200"));
+    const long long ms = std::llround(r.t * 1000.0);
+    if (ms <= previous_ms) bad(i, cat("time ", r.t, " s is not after the previous epoch at 1 ms"));
+    previous_ms = ms;
+    for (const auto& c : detail::kPosColumns) {
+      if (!opt.velocity && std::string_view(c.name).starts_with("v")) continue;
+      if (!opt.velocity && std::string_view(c.name).starts_with("sdv")) continue;
+      const double v = r.*(c.member);
+      if (!(v >= c.lo && v <= c.hi)) bad(i, cat(c.name, " is ", v, ", outside [", c.lo, ", ", c.hi, "]"));
+    }
+    if (r.q < 0 || r.q > 7) bad(i, cat("Q ", r.q, " outside [0, 7]"));
+    if (r.ns < 0 || r.ns > 255) bad(i, cat("ns ", r.ns, " outside [0, 255]"));
+    int n = std::snprintf(buf, sizeof buf, "%s %14.9f %14.9f %10.4f %3d %3d %8.4f %8.4f %8.4f %8.4f %8.4f %8.4f %6.2f %6.1f",
+                          detail::calendar_time(ms).c_str(), r.latitude_deg, r.longitude_deg, r.height_m, r.q, r.ns,
+                          r.sdn_m, r.sde_m, r.sdu_m, r.sdne_m, r.sdeu_m, r.sdun_m, r.age_s, r.ratio);
+    text.append(buf, static_cast<std::size_t>(n));
+    if (opt.velocity) {
+      n = std::snprintf(buf, sizeof buf, " %10.5f %10.5f %10.5f %9.5f %9.5f %9.5f %9.5f %9.5f %9.5f", r.vn_mps, r.ve_mps,
+                        r.vu_mps, r.sdvn_mps, r.sdve_mps, r.sdvu_mps, r.sdvne_mps, r.sdveu_mps, r.sdvun_mps);
+      text.append(buf, static_cast<std::size_t>(n));
+    }
+    text += '\n';
+  }
+  std::ofstream os(path, std::ios::binary | std::ios::trunc);
+  os.write(text.data(), static_cast<std::streamsize>(text.size()));
+  if (!os.flush()) throw std::runtime_error("write_rtklib_pos: cannot write " + path.string());
+}
+
+/// The fixes through to_rtklib_pos_record; velocity columns only when every fix has one.
+inline void write_rtklib_pos(const std::filesystem::path& path, std::span<const GnssFix> fixes,
+                             RtklibPosWriteOptions opt = {}) {
+  std::vector<RtklibPosRecord> records;
+  records.reserve(fixes.size());
+  bool all_velocity = true;
+  for (const auto& f : fixes) {
+    records.push_back(to_rtklib_pos_record(f));
+    all_velocity = all_velocity && f.velocity.has_value();
+  }
+  opt.velocity = opt.velocity && all_velocity;
+  write_rtklib_pos(path, std::span<const RtklibPosRecord>(records), opt);
 }
 
 }  // namespace ctxfuse::io

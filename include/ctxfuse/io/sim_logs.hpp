@@ -113,9 +113,12 @@ class Rows {
     if (line != header) file_.fail(cat("header is ", quote(line), ", expected ", quote(header)));
   }
 
-  /// Advances to the next non-blank row; false at the end of the file.
+  /// Advances to the next non-blank row; false at the end of the file. The writer ends every
+  /// row with a newline, so a last row without one was cut short (a number cut short still
+  /// parses): it is not read.
   bool next() {
     if (!next_fields(file_, fields_, Separator::comma)) return false;
+    if (!file_.ended_by_newline()) return false;
     fields_.expect_count(header_.size());
     return true;
   }

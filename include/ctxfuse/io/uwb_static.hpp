@@ -8,6 +8,8 @@
 //   first field is not a number ends the data; the rest of the file is ignored.
 // - Rows whose RSSI or first-path RSSI is -inf/inf/nan (the chip reports -inf when a power
 //   computation fails) are skipped and counted, not treated as errors.
+// - A last line without a newline, before the summary block, is a cut line: skipped and
+//   counted (a cut number still parses, "-79." for "-79.5").
 // - Anything else that does not parse (wrong number of fields, a non-number in a used column,
 //   a negative or absurd distance) throws io::ParseError (alias UwbDataError) naming file,
 //   line and column (file:line:column: column 'name': ...).
@@ -45,6 +47,7 @@ struct UwbStaticReadStats {
   std::size_t files = 0;
   std::size_t ranges = 0;
   std::size_t skipped_non_finite_power = 0;
+  std::size_t skipped_partial_last_lines = 0;  // one at most per file
 };
 
 namespace detail {
@@ -95,6 +98,10 @@ inline std::vector<UwbStaticRange> read_uwb_static_file(const std::filesystem::p
   while (io::next_fields(file, f, io::Separator::comma)) {
     double first = 0.0;
     if (io::parse_real(f[0], first, power) != io::NumberError::none) break;  // summary block
+    if (!file.ended_by_newline()) {
+      ++stats.skipped_partial_last_lines;
+      break;
+    }
     f.expect_count(header.size());
     UwbStaticRange r;
     r.true_distance_m = true_distance_m;

@@ -1,6 +1,6 @@
 // When the INS constraints apply: static detection from the raw IMU (ZUPT and ZIHR while
 // static, the non-holonomic constraint while moving), the magnetometer's relative heading
-// since a quasi-static-field epoch, and dynamic alignment from two good GNSS fixes. Plain
+// since a quasi-static-field epoch (dynamic alignment: models/alignment.hpp). Plain
 // state machines with fixed storage: nothing allocates per sample.
 #pragma once
 
@@ -119,62 +119,6 @@ class MagRelativeHeading {
   }
   double heading0_ = 0.0, mag0_ = 0.0, norm0_ = 0.0, dip0_ = 0.0;
   bool active_ = false;
-};
-
-struct AlignmentFix {
-  double t = 0.0;
-  Eigen::Vector3d llh = Eigen::Vector3d::Zero();  // lat, lon [rad], height [m]
-  bool good = false;                               // e.g. RTK fixed or a small reported sigma
-};
-
-/// Dynamic alignment: a good fix and an earlier one of the same unbroken run of good fixes,
-/// about 1 s older (within `interval_tolerance`) and more than `min_distance` away horizontally,
-/// give position (the newer fix), velocity (the displacement over the interval) and heading
-/// (its direction); roll and pitch zero (a land vehicle; the filter's covariance says how sure
-/// that is). A bad fix breaks the run. Works at any fix rate up to kCapacity fixes per interval.
-class DynamicAlignment {
- public:
-  static constexpr int kCapacity = 64;
-  double interval = 1.0;            // [s]
-  double interval_tolerance = 0.1;  // [s]
-  double min_distance = 5.0;        // [m]
-
-  /// Forgets the fixes kept (a new alignment from the next two).
-  void reset() { count_ = 0; }
-
-  std::optional<NavState> push(const AlignmentFix& fix) {
-    if (!fix.good || !std::isfinite(fix.t) || !all_finite(fix.llh) || (count_ > 0 && fix.t <= newest().t)) {
-      count_ = 0;
-      return std::nullopt;
-    }
-    std::optional<NavState> out;
-    for (int i = 0; i < count_ && !out; ++i) {
-      const AlignmentFix& old = at(i);
-      const double dt = fix.t - old.t;
-      if (std::abs(dt - interval) > interval_tolerance) continue;
-      const Eigen::Vector3d d = earth::GeodeticRetraction::difference(fix.llh, old.llh);
-      if (d.head<2>().norm() <= min_distance) continue;
-      NavState x;
-      x.get<"p">() = fix.llh;
-      x.get<"v">() = d / dt;
-      x.get<"theta">() = Eigen::Quaterniond(Eigen::AngleAxisd(std::atan2(d(1), d(0)), Eigen::Vector3d::UnitZ()));
-      out = x;
-    }
-    ring_[static_cast<std::size_t>(head_)] = fix;
-    head_ = (head_ + 1) % kCapacity;
-    if (count_ < kCapacity) ++count_;
-    return out;
-  }
-
- private:
-  // i = 0 is the oldest kept fix.
-  const AlignmentFix& at(int i) const {
-    return ring_[static_cast<std::size_t>((head_ - count_ + i + 2 * kCapacity) % kCapacity)];
-  }
-  const AlignmentFix& newest() const { return at(count_ - 1); }
-  std::array<AlignmentFix, kCapacity> ring_{};
-  int head_ = 0;
-  int count_ = 0;
 };
 
 }  // namespace ctxfuse::models

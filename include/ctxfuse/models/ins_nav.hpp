@@ -15,7 +15,7 @@
 //   using Ins20 = Augmented<InsNavModel<>, Block<"mount", 2>, Block<"lever", 3>>;  // ins_augment.hpp
 //   ImuInput imu{mounting_rotation(r, p, y), delay};   // ins_input.hpp
 //   Before the replay, shift each io::ImuSample's stamp with imu.apply_delay; start the filter
-//   from DynamicAlignment (ins_motion.hpp) fed with the good io::GnssFix positions. Handler:
+//   from a DynamicAligner (alignment.hpp) fed with the io::GnssFix positions. Handler:
 //     propagate(u, dt):  BodyIncrements inc;
 //                        if (imu.from_rates(u.gyro, u.accel, dt, inc).accepted())
 //                          eskf::predict(model, belief, inc, dt, opts, &F);  rts.predicted(F);

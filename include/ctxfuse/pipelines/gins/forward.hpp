@@ -9,7 +9,8 @@
 //                     gate; a withheld fix still closes an epoch, so the trajectory has a row
 //                     at every GNSS stamp.
 // Before the filter starts it levels on the static start (roll, pitch, gyro bias from the
-// mean of its samples) and waits for a dynamic alignment (two used fixes 1 s and > 2 m apart).
+// mean of its samples) and waits for a dynamic alignment (models/alignment.hpp: heading from
+// the receiver's velocity or a straight baseline of fixes, once its sigma is small enough).
 // More than Settings::imu_max_unmeasured_s without a measured IMU sample loses it: it re-aligns
 // the same way once the IMU is back (lose, try_align). A GNSS position or velocity the gate
 // refuses three times in a row is released (release).
@@ -27,6 +28,7 @@
 #include "ctxfuse/filters/eskf.hpp"
 #include "ctxfuse/filters/rts.hpp"
 #include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/models/alignment.hpp"
 #include "ctxfuse/models/held_input.hpp"
 #include "ctxfuse/models/ins_augment.hpp"
 #include "ctxfuse/models/ins_input.hpp"
@@ -50,12 +52,27 @@ inline Eigen::Matrix3d body_from_imu(const Installation& inst) {
 }
 
 
+/// The GNSS/INS alignment (models/alignment.hpp): the receiver's velocity or a straight
+/// baseline, floored by the start's sigmas.
+inline models::AlignmentOptions alignment_options(const Settings& s) {
+  models::AlignmentOptions o;
+  o.max_span_s = s.alignment_max_span_s;
+  o.min_distance_m = s.alignment_min_distance_m;
+  o.max_heading_sigma = s.alignment_max_heading_sigma;
+  o.velocity_baseline_s = 1.0;
+  o.straight_track = true;
+  o.velocity_sigma_floor_mps = s.initial_velocity_sigma;
+  o.heading_sigma_floor = s.initial_heading_sigma;
+  return o;
+}
+
 struct PassCounts {
   std::size_t imu_steps = 0, imu_refused = 0, filter_failures = 0;
   std::size_t gnss_used = 0, gnss_withheld = 0, gnss_decimated = 0, gnss_gated = 0, gnss_refused = 0, gnss_released = 0;
   std::size_t velocity_used = 0, velocity_gated = 0, velocity_released = 0;
   std::size_t zupt = 0, zupt_gated = 0, zihr = 0, zihr_gated = 0, nhc = 0, nhc_gated = 0, mag = 0, mag_gated = 0;
   std::size_t static_samples = 0;
+  std::size_t static_but_moving = 0;  // IMU samples still by the detector, moving by the filter's speed
   std::size_t imu_losses = 0, realignments = 0;  // IMU gaps past imu_max_unmeasured_s, and re-alignments after them
 };
 
@@ -68,7 +85,8 @@ class ForwardPass {
   ForwardPass(const Settings& s, const Installation& inst, const Constraints& c, std::vector<OutageWindow> windows,
               double gnss_rate_hz)
       : s_(s), c_(c), windows_(std::move(windows)), decimator_(gnss_rate_hz),
-        detector_(s.static_window, s.static_gyro_threshold, s.static_accel_threshold), gate_(s.gate_probability) {
+        detector_(s.static_window_s, s.static_gyro_threshold, s.static_accel_threshold), gate_(s.gate_probability),
+        align_(alignment_options(s)) {
     Nav15* nav = nullptr;
     if constexpr (requires { model_.base; }) nav = &model_.base; else nav = &model_;
     nav->gyro_noise_density = s.gyro_noise_density;
@@ -83,8 +101,6 @@ class ForwardPass {
     zupt_.sigma = s.zupt_sigma_mps;
     zihr_.sigma = s.zihr_sigma;
     mag_heading_.sigma = s.mag_heading_sigma;
-    align_.interval = s.alignment_interval_s;
-    align_.min_distance = s.alignment_min_distance_m;
   }
 
   void reserve(std::size_t epochs) { rts_.reserve(epochs); used_.reserve(epochs); }
@@ -149,7 +165,17 @@ class ForwardPass {
       const models::NavState x = nav_part<Model>(belief_.nominal);
       horizontal = (x.get<"theta">() * (f - x.get<"ba">())).head<2>();
     }
-    const bool st = detector_.push(w, f, horizontal);
+    const bool still = detector_.push(u.t, w, f, horizontal);
+    // An IMU cannot tell steady straight motion from rest (a smooth robot at 0.3 m/s reads as
+    // still): once aligned, static also needs the filter's horizontal speed, and the latest
+    // used GNSS velocity if it is under static_gnss_hold_s old, below static_max_speed_mps.
+    bool st = still;
+    if (still && aligned_) {
+      const double speed = nav_part<Model>(belief_.nominal).template get<"v">().template head<2>().norm();
+      const bool gnss_says_moving = gnss_moving_ && u.t - gnss_motion_t_ < s_.static_gnss_hold_s;
+      st = !gnss_says_moving && speed <= s_.static_max_speed_mps;
+      counts_.static_but_moving += st ? 0 : 1;
+    }
     if (st) ++counts_.static_samples;
     // The static start: every static sample before the (first) alignment.
     if (st && !aligned_ && !lost_) {
@@ -195,7 +221,7 @@ class ForwardPass {
     counts_.gnss_decimated += kept ? 0 : 1;
     counts_.gnss_withheld += kept && withheld ? 1 : 0;
     const Eigen::Vector3d z(fix.position(0) * kDeg, fix.position(1) * kDeg, fix.position(2));
-    const Eigen::Matrix3d cov = floored(models::ned_from_enu_cov(fix.cov), s_.gnss_position_sigma_floor_m);
+    const Eigen::Matrix3d cov = floored(models::ned_from_enu_cov(fix.cov), s_.gnss_sigma_floor(fix.quality));
     if (!aligned_) {
       if (use && (!lost_ || imu_back_)) try_align(fix, z, cov);
       return;
@@ -222,6 +248,7 @@ class ForwardPass {
     if (s_.use_gnss_velocity && fix.velocity) {
       const Eigen::Vector3d v(fix.velocity->y(), fix.velocity->x(), -fix.velocity->z());
       gnss_velocity_.R = floored(models::ned_from_enu_cov(fix.velocity_cov), s_.gnss_velocity_sigma_floor_mps);
+      note_gnss_motion(fix.t, v.head<2>());
       gnss_velocity_.gyro = gyro_body_;
       if (gnss_velocity_.R.allFinite())
         count(update_or_release<"v">(gnss_velocity_, v, velocity_gated_in_row_, counts_.velocity_released),
@@ -236,6 +263,8 @@ class ForwardPass {
   /// The filter's belief now (meaningful once aligned).
   const B& belief() const { return belief_; }
   double alignment_time() const { return align_t_; }
+  /// The alignment the pass started (or last re-started) from.
+  const models::PlanarAlignment& alignment() const { return alignment_; }
   const PassCounts& counts() const { return counts_; }
   const StaticStats& static_start() const { return start_; }
   RtsRecorder<Model>& recorder() { return rts_; }
@@ -320,7 +349,7 @@ class ForwardPass {
 
   /// The IMU stopped measuring (a dropout, refused samples, a clock jump) for longer than a
   /// held sample can stand for a car's motion: the pass stops, keeps what the gap does not
-  /// change (biases, mounting, lever arm, roll and pitch) and re-aligns from the next two good
+  /// change (biases, mounting, lever arm, roll and pitch) and re-aligns from the next good
   /// fixes once the IMU is back, as at the start. The RTS records restart there.
   /// While lost, belief_ is left as it was (nothing predicts or updates it) and is what the
   /// re-alignment keeps from.
@@ -330,17 +359,39 @@ class ForwardPass {
     imu_back_ = false;
     unmeasured_ = 0.0;
     align_.reset();
+    align_empty_ = true;
     held_heading_.reset();
     mag_ = models::MagRelativeHeading{};  // its reference attitude is the lost one
     gated_in_row_ = velocity_gated_in_row_ = 0;
     ++counts_.imu_losses;
   }
 
+  /// Whether a used GNSS velocity says the platform moves (faster than static_max_speed_mps).
+  void note_gnss_motion(double t, const Eigen::Vector2d& v) {
+    gnss_motion_t_ = t;
+    gnss_moving_ = v.norm() > s_.static_max_speed_mps;
+  }
+
+  /// Offers a used fix to the aligner, in a (north, east) plane about the first fix it holds,
+  /// with the receiver's velocity when the fix has one; starts the filter once it aligns.
   void try_align(const io::GnssFix& fix, const Eigen::Vector3d& z, const Eigen::Matrix3d& cov) {
-    const bool good = fix.quality == io::FixQuality::fixed || fix.quality == io::FixQuality::floating;
-    const auto x = align_.push({fix.t, z, good && cov.allFinite()});
-    if (!x) return;
-    const B b = initial_belief<Model>(s_, *x, fix, z, cov, gnss_.lever_arm, nhc_.vehicle.lever_arm, start_,
+    if (!cov.allFinite() || !z.allFinite()) return;
+    if (align_empty_) {
+      align_origin_ = z;
+      align_empty_ = false;
+    }
+    models::PlanarFix pf;
+    pf.t = fix.t;
+    pf.p = earth::GeodeticRetraction::difference(z, align_origin_).head<2>();
+    pf.cov = cov.topLeftCorner<2, 2>();
+    if (s_.use_gnss_velocity && fix.velocity) {
+      pf.has_velocity = true;
+      pf.v = Eigen::Vector2d(fix.velocity->y(), fix.velocity->x());
+      pf.v_cov = floored(models::ned_from_enu_cov(fix.velocity_cov), s_.gnss_velocity_sigma_floor_mps).topLeftCorner<2, 2>();
+    }
+    const auto a = align_.add(pf);
+    if (!a) return;
+    const B b = initial_belief<Model>(s_, *a, fix, z, cov, gnss_.lever_arm, nhc_.vehicle.lever_arm, start_,
                                       lost_ ? &belief_ : nullptr);
     if (lost_) {
       if (!rts_.restart(fix.t, b).accepted()) return;
@@ -351,6 +402,8 @@ class ForwardPass {
       used_.assign(1, 1);
     }
     belief_ = b;
+    alignment_ = *a;
+    if (pf.has_velocity) note_gnss_motion(fix.t, pf.v);
     lost_ = false;
     aligned_ = true;
     align_t_ = fix.t;
@@ -366,7 +419,9 @@ class ForwardPass {
   Model model_{};
   models::ImuInput imu_;
   models::HeldInput<io::ImuSample> held_imu_;
-  models::DynamicAlignment align_;
+  models::DynamicAligner align_;
+  Eigen::Vector3d align_origin_ = Eigen::Vector3d::Zero();  // geodetic origin of the aligner's (north, east) plane
+  models::PlanarAlignment alignment_{};
   models::GnssGeodeticPosition<S> gnss_;
   models::GnssVelocity<S> gnss_velocity_;
   models::ZeroVelocity<S> zupt_;
@@ -393,6 +448,10 @@ class ForwardPass {
   // in a row.
   double sample_t_ = NAN, sample_elapsed_ = 0.0, unmeasured_ = 0.0;
   bool lost_ = false, imu_back_ = false;
+  bool align_empty_ = true;
+  // The latest used GNSS velocity: whether it said the platform moves, and its time.
+  bool gnss_moving_ = false;
+  double gnss_motion_t_ = -INFINITY;
 };
 
 }  // namespace ctxfuse::pipelines::gins

@@ -1,7 +1,8 @@
-// The belief the GNSS/INS forward pass (forward.hpp) starts from once the dynamic alignment has
-// a state: position, velocity and heading from the fixes; roll, pitch and gyro bias from the
-// static start, or, after an IMU gap (ForwardPass::lose), everything the gap does not change
-// from the belief the pass lost. A pure function of its inputs.
+// The belief the GNSS/INS forward pass (forward.hpp) starts from once the dynamic alignment
+// (models/alignment.hpp) has one: position, velocity and heading from the fixes; roll, pitch
+// and gyro bias from the static start (level as mounted, with a wide sigma, when the
+// recording starts moving), or, after an IMU gap (ForwardPass::lose), everything the gap does
+// not change from the belief the pass lost. A pure function of its inputs.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -12,6 +13,7 @@
 #include "ctxfuse/models/earth.hpp"
 #include "ctxfuse/filters/eskf.hpp"
 #include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/models/alignment.hpp"
 #include "ctxfuse/models/ins_augment.hpp"
 #include "ctxfuse/models/ins_motion.hpp"
 #include "ctxfuse/pipelines/gins/settings.hpp"
@@ -29,18 +31,20 @@ models::NavState nav_part(const typename Model::State& x) {
   if constexpr (requires { Model::base_part(x); }) return Model::base_part(x); else return x;
 }
 
-/// nav: the aligner's state (position, velocity and heading from two fixes); fix, z [rad, rad,
-/// m], cov [m^2, NED]: the fix that completed it; gnss_lever: IMU to antenna, nhc_lever: IMU to
-/// the NHC point (body axes); lost: the belief before an IMU gap, or nullptr at the start.
+/// a: the alignment in the (north, east) plane (position, horizontal velocity, heading = NED
+/// yaw, with their covariances); fix, z [rad, rad, m], cov [m^2, NED]: the fix that completed
+/// it; gnss_lever: IMU to antenna, nhc_lever: IMU to the NHC point (body axes); start: the
+/// static start (none: roll and pitch zero with initial_roll_pitch_sigma_unlevelled); lost:
+/// the belief before an IMU gap, or nullptr at the start.
 template <class Model>
-eskf::Belief<Model> initial_belief(const Settings& s, models::NavState nav, const io::GnssFix& fix, const Eigen::Vector3d& z,
-                                   const Eigen::Matrix3d& cov, const Eigen::Vector3d& gnss_lever,
-                                   const Eigen::Vector3d& nhc_lever, const StaticStats& start,
-                                   const eskf::Belief<Model>* lost) {
+eskf::Belief<Model> initial_belief(const Settings& s, const models::PlanarAlignment& a, const io::GnssFix& fix,
+                                   const Eigen::Vector3d& z, const Eigen::Matrix3d& cov, const Eigen::Vector3d& gnss_lever,
+                                   const Eigen::Vector3d& nhc_lever, const StaticStats& start, const eskf::Belief<Model>* lost) {
   using S = typename Model::State;
   // Roll and pitch from the static start's mean specific force (f = -C' g at rest); after a
-  // loss, the filter's own.
+  // loss, the filter's own; with neither, level as mounted.
   double roll = 0.0, pitch = 0.0;
+  double rp_sigma = s.initial_roll_pitch_sigma;
   if (lost) {
     const Eigen::Matrix3d C = nav_part<Model>(lost->nominal).template get<"theta">().toRotationMatrix();
     roll = std::atan2(C(2, 1), C(2, 2));
@@ -49,14 +53,14 @@ eskf::Belief<Model> initial_belief(const Settings& s, models::NavState nav, cons
     const Eigen::Vector3d& f = start.accel_mean;
     roll = std::atan2(-f(1), -f(2));
     pitch = std::atan2(f(0), std::hypot(f(1), f(2)));
+  } else {
+    rp_sigma = s.initial_roll_pitch_sigma_unlevelled;
   }
-  // Heading: the fix's own velocity direction when it has one (the instant's track; the
-  // displacement over the last second lags a turn by half a second), else the displacement.
-  double yaw = models::heading_of(nav.get<"theta">().toRotationMatrix());
-  if (fix.velocity && fix.velocity->head<2>().norm() > 0.5 * s.alignment_min_distance_m / s.alignment_interval_s)
-    yaw = std::atan2(fix.velocity->x(), fix.velocity->y());
+  // Heading: the alignment's (the receiver's velocity direction or a straight baseline).
+  const double yaw = a.heading;
   const Eigen::Quaterniond q = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
                                Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX());
+  models::NavState nav;
   nav.get<"theta">() = q;
   if (lost) {
     nav.get<"bg">() = nav_part<Model>(lost->nominal).template get<"bg">();
@@ -65,7 +69,13 @@ eskf::Belief<Model> initial_belief(const Settings& s, models::NavState nav, cons
     // The static mean holds the earth's rate too, which the full mechanisation models.
     nav.get<"bg">() = start.gyro_mean - q.conjugate() * earth::earth_rate_ned(z(0));
   }
-  if (fix.velocity) nav.get<"v">() = Eigen::Vector3d(fix.velocity->y(), fix.velocity->x(), -fix.velocity->z());
+  // Velocity: the receiver's when it reports one (an instant's, not a baseline's mean).
+  nav.get<"v">() = Eigen::Vector3d(a.velocity.x(), a.velocity.y(), 0.0);
+  Eigen::Vector2d v_var = a.velocity_cov.diagonal();
+  if (fix.velocity) {
+    nav.get<"v">() = Eigen::Vector3d(fix.velocity->y(), fix.velocity->x(), -fix.velocity->z());
+    v_var = Eigen::Vector2d(fix.velocity_cov(1, 1), fix.velocity_cov(0, 0));
+  }
   nav.get<"p">() = earth::GeodeticRetraction::inject(z, -(q * gnss_lever));
   eskf::Belief<Model> b;
   if constexpr (requires { Model::set_base_part(b.nominal, nav); }) {
@@ -78,9 +88,10 @@ eskf::Belief<Model> initial_belief(const Settings& s, models::NavState nav, cons
   using L = typename Model::ErrorLayout;
   b.cov.setZero();
   L::template cov<"p">(b.cov) = cov;
-  L::template cov<"v">(b.cov).diagonal().setConstant(s.initial_velocity_sigma * s.initial_velocity_sigma);
-  const double rp = s.initial_roll_pitch_sigma * s.initial_roll_pitch_sigma;
-  L::template cov<"theta">(b.cov).diagonal() << rp, rp, s.initial_heading_sigma * s.initial_heading_sigma;
+  const double v2 = s.initial_velocity_sigma * s.initial_velocity_sigma;
+  L::template cov<"v">(b.cov).diagonal() << std::max(v_var(0), v2), std::max(v_var(1), v2), v2;
+  const double rp = rp_sigma * rp_sigma;
+  L::template cov<"theta">(b.cov).diagonal() << rp, rp, std::max(a.heading_var, s.initial_heading_sigma * s.initial_heading_sigma);
   L::template cov<"bg">(b.cov).diagonal().setConstant(s.initial_gyro_bias_sigma * s.initial_gyro_bias_sigma);
   L::template cov<"ba">(b.cov).diagonal().setConstant(s.initial_accel_bias_sigma * s.initial_accel_bias_sigma);
   if constexpr (S::has("mount")) {

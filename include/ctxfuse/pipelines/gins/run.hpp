@@ -25,6 +25,8 @@ struct Recording {
   std::vector<io::GnssFix> fixes;
   std::vector<io::MagSample> mag;  // empty without a mag*.csv (io/mag_csv.hpp: IMU axes, own stamps)
   std::filesystem::path pos_file, imu_file, mag_file;
+  io::ImuTimeMapping imu_time;        // how the IMU's ticks became GPST (io/imu_tag.hpp)
+  std::size_t imu_partial_lines = 0;  // cut lines the csv reader skipped (a logger's start or stop)
 };
 
 /// Reads DIR: exactly one *.pos and one imu*.csv (with imu*.csv.tag beside it), and at most
@@ -50,7 +52,9 @@ inline Recording read_recording(const std::filesystem::path& dir) {
   const fs::path tag = r.imu_file.string() + ".tag";
   if (!fs::exists(tag)) throw std::runtime_error(r.imu_file.string() + ": no time-tag file " + tag.filename().string());
   r.fixes = io::to_gnss_fixes(io::read_rtklib_pos(r.pos_file));
-  r.imu = io::to_imu_samples(io::read_imu_csv(r.imu_file), io::read_time_tag(tag));
+  const auto log = io::read_imu_csv(r.imu_file);
+  r.imu = io::to_imu_samples(log, io::read_time_tag(tag), {}, &r.imu_time);
+  r.imu_partial_lines = log.skipped_lines();
   if (!mag.empty()) {
     r.mag_file = mag.front();
     r.mag = io::read_mag_csv(r.mag_file);
@@ -90,6 +94,7 @@ struct RunResult {
   double imu_rate_hz = 0.0;  // samples / span of the IMU stream
   bool aligned = false;
   double alignment_time = 0.0;
+  models::PlanarAlignment alignment{};  // the (last) alignment: heading source, baseline, sigmas
   std::size_t record_bytes = 0;  // memory of the step records
   Status smooth_status{};
   io::ReplayReport<2> replay;  // streams: GNSS fixes, magnetometer
@@ -132,6 +137,7 @@ RunResult run(std::span<const io::ImuSample> imu_raw, std::span<const io::GnssFi
   out.static_start = pass.static_start();
   out.aligned = pass.aligned();
   out.alignment_time = pass.alignment_time();
+  out.alignment = pass.alignment();
   if (!out.aligned) return out;
   auto& rec = pass.recorder();
   const auto& used = pass.gnss_used_per_epoch();

@@ -9,6 +9,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "ctxfuse/io/messages.hpp"
+
 namespace ctxfuse::pipelines::gins {
 
 inline constexpr double kDeg = std::numbers::pi / 180.0;
@@ -71,24 +73,52 @@ struct Settings {
   // absorbs the horizontal part into roll and pitch, hence the attitude sigma below.
   double initial_accel_bias_sigma = 0.03;        // [m/s^2] (3 mg)
   double initial_roll_pitch_sigma = 0.5 * kDeg;  // levelling from the static start
-  double initial_heading_sigma = 2.0 * kDeg;     // from two fixes > 5 m apart (1 cm each) in a car that may crab
+  // A recording that starts moving has no static start to level on: roll and pitch start at
+  // zero in the body frame (the platform level as mounted) with this sigma, a ground
+  // platform's slope and a held device's tilt (10 deg, about a 18 % grade).
+  double initial_roll_pitch_sigma_unlevelled = 10.0 * kDeg;
+  // Heading: the alignment's own sigma (models/alignment.hpp), floored by how far the body's
+  // forward axis may point from the direction of travel (Platform below: 2 deg for a car that
+  // may crab or a robot, 15 deg for a device held in the hand).
+  double initial_heading_sigma = 2.0 * kDeg;
   double initial_velocity_sigma = 0.2;           // [m/s] the fix's velocity
   // 20-state blocks: the vehicle's mounting pitch/heading in the body frame after the given
   // installation angles (a residual of a hand-measured installation, ~1 deg) and the lever arm
   // to the NHC point (the given lever arms, hand-measured to ~10 cm).
   double initial_mount_sigma = 1.0 * kDeg;
   double initial_lever_sigma = 0.1;  // [m]
-  // Dynamic alignment: two good fixes 1 s apart (issue 17) and far enough apart that their
-  // noise (the 5 cm floor below, sqrt(2) x for the difference) leaves the heading within the
-  // 2 deg above: 0.07 m / tan(2 deg) = 2 m. (The issue's 5 m is for metre-level fixes; with
-  // RTK it would hold the start back until the car reaches 5 m/s.)
-  double alignment_interval_s = 1.0;
-  double alignment_min_distance_m = 2.0;
+  // Dynamic alignment (models/alignment.hpp): heading from the receiver's velocity or the
+  // longest straight baseline of the last 10 s, once its 1-sigma from the fixes' own
+  // covariances is below alignment_max_heading_sigma. With RTK fixes (5 cm floor below) 2 deg
+  // needs a 2 m baseline: a car within a second of moving off, a 0.3 m/s robot within 7 s.
+  // Baselines shorter than 1 m are not used (a standing platform's fixes scatter by
+  // centimetres to decimetres).
+  double alignment_max_span_s = 10.0;
+  double alignment_min_distance_m = 1.0;
+  double alignment_max_heading_sigma = 2.0 * kDeg;
 
   // --- GNSS -------------------------------------------------------------------------------
-  // R from the receiver's own sd columns, floored: RTKLIB's fixed solutions claim 1 cm, but
-  // the antenna's phase centre, multipath and the lever arm's own error are a few cm.
-  double gnss_position_sigma_floor_m = 0.05;
+  // R from the receiver's own sd columns, floored by the solution's quality: receivers report
+  // float and single solutions with sigmas as small as a fixed one's. RTK fixed: the antenna's
+  // phase centre, multipath and the lever arm's own error are a few cm (RTKLIB claims 1 cm);
+  // PPP 10 cm; RTK float decimetres (25 cm); DGNSS 0.5 m; SBAS 1 m; a single-point solution
+  // 1.5 m (a code receiver's horizontal accuracy in open sky); unknown as single.
+  double gnss_position_sigma_floor_m = 0.05;  // RTK fixed
+  double gnss_ppp_sigma_floor_m = 0.10;
+  double gnss_float_sigma_floor_m = 0.25;
+  double gnss_dgnss_sigma_floor_m = 0.5;
+  double gnss_sbas_sigma_floor_m = 1.0;
+  double gnss_single_sigma_floor_m = 1.5;
+  double gnss_sigma_floor(io::FixQuality q) const {
+    switch (q) {
+      case io::FixQuality::fixed: return gnss_position_sigma_floor_m;
+      case io::FixQuality::ppp: return gnss_ppp_sigma_floor_m;
+      case io::FixQuality::floating: return gnss_float_sigma_floor_m;
+      case io::FixQuality::dgps: return gnss_dgnss_sigma_floor_m;
+      case io::FixQuality::sbas: return gnss_sbas_sigma_floor_m;
+      default: return gnss_single_sigma_floor_m;
+    }
+  }
   double gnss_velocity_sigma_floor_mps = 0.05;
   bool use_gnss_velocity = true;
   // Textbook one-tailed test at 99.9 %: a fix outside it is refused, not forced in.
@@ -102,11 +132,22 @@ struct Settings {
   // Applied every constraint_interval_s (10 Hz: the car's suspension and steering change the
   // violation at a few Hz; faster updates would treat correlated violations as white).
   double constraint_interval_s = 0.1;
-  // Static detection: upstream's ZUPT window and thresholds (data README): 50 epochs,
-  // 0.25 m/s^2, 0.25 deg/s.
-  int static_window = 50;
+  // Static detection (static_start.hpp): the window in seconds, upstream's ZUPT window and
+  // thresholds (data README: 50 epochs of its 100 Hz IMU, 0.25 m/s^2, 0.25 deg/s).
+  double static_window_s = 0.5;
   double static_accel_threshold = 0.25;
   double static_gyro_threshold = 0.25 * kDeg;
+  // Steady straight motion reads as still to an IMU (a smooth robot at 0.3 m/s): a still IMU
+  // is static only while the filter's horizontal speed, and the latest used GNSS velocity if
+  // it is under static_gnss_hold_s old, are below static_max_speed_mps (forward.hpp). A ZUPT
+  // taken while moving stops the platform in the filter; one missed at rest costs little. The
+  // decision is on the speeds themselves, not on their sigmas: in an outage the filter's
+  // along-track velocity sigma grows past the platform's speed (a 3 mg bias prior: 0.3 m/s
+  // in 10 s), while its best estimate still says it moves. 0.1 m/s: twice the GNSS velocity's
+  // floor, a third of the slowest platform's speed (a robot at 0.3 m/s). The GNSS velocity
+  // holds for a 1 Hz receiver's interval and half of it.
+  double static_max_speed_mps = 0.1;
+  double static_gnss_hold_s = 1.5;
   double zupt_sigma_mps = 0.02;      // a parked car's rocking on its suspension
   double zihr_sigma = 0.1 * kDeg;    // heading of a parked car
   // NHC: side slip and suspension travel of a car on a road, 0.1 m/s (a slip angle of 0.5 deg
@@ -114,5 +155,49 @@ struct Settings {
   double nhc_sigma_mps = 0.1;
   double mag_heading_sigma = 2.0 * kDeg;
 };
+
+/// The kind of platform the sensors ride on: what the constraints may assume.
+enum class Platform { car, pedestrian, robot };
+
+inline const char* name_of(Platform p) {
+  return p == Platform::car ? "car" : p == Platform::pedestrian ? "pedestrian" : "robot";
+}
+
+/// The constraints a platform allows: a wheeled platform neither slips sideways nor leaves the
+/// ground (NHC) and stands still when parked (ZUPT); a walker's device stands still only while
+/// its holder does (ZUPT) and moves sideways at will (no NHC).
+inline Constraints default_constraints(Platform p) {
+  Constraints c;
+  c.zupt = true;
+  c.nhc = p != Platform::pedestrian;
+  return c;
+}
+
+/// The settings for a platform: the same noise figures, and what differs with the platform.
+///  - car: as Settings (a parked car's rocking 0.02 m/s; side slip 0.1 m/s; forward axis within
+///    2 deg of the track).
+///  - pedestrian: a device held in the hand while its holder stands sways by centimetres a
+///    second (ZUPT 0.05 m/s) and points within 15 deg of the walking direction (heading floor);
+///    the alignment waits for 5 deg, a third of that.
+///  - robot: a parked robot is rigid (ZUPT 0.01 m/s); a skid-steered or differential-drive
+///    base slips sideways in turns by a few cm/s at walking speed (NHC 0.05 m/s); its forward
+///    axis is the direction of travel within 2 deg, and at 0.3 m/s it waits for 3 deg (a 1.4 m
+///    baseline with RTK fixes) rather than 2.
+inline Settings settings_for(Platform p, Settings s = {}) {
+  switch (p) {
+    case Platform::car: break;
+    case Platform::pedestrian:
+      s.zupt_sigma_mps = 0.05;
+      s.initial_heading_sigma = 15.0 * kDeg;
+      s.alignment_max_heading_sigma = 5.0 * kDeg;
+      break;
+    case Platform::robot:
+      s.zupt_sigma_mps = 0.01;
+      s.nhc_sigma_mps = 0.05;
+      s.alignment_max_heading_sigma = 3.0 * kDeg;
+      break;
+  }
+  return s;
+}
 
 }  // namespace ctxfuse::pipelines::gins

@@ -41,16 +41,20 @@ template <int MaxAnchors>
 using CalibratedLayout = Layout<Block<"p", 2>, Block<"v", 2>, Block<"b", MaxAnchors>>;
 
 /// MaxAnchors bias slots, taken by anchor id in the order the anchors first range; an anchor
-/// beyond them is used without a bias state. LagCapacity bounds the fixed-lag window in records
-/// (one per accepted range, one per epoch's end): 0.9 s of 4 anchors at 10 Hz is 45.
-template <GatePolicy Gate = ChiSquareGate, bool Lagged = false, int MaxAnchors = 8, int LagCapacity = 64>
+/// beyond them is used without a bias state. The pipeline's runs (eval/nlos_uwb.hpp) take 16,
+/// its anchor limit (NlosClassifier::kMaxAnchors): a slot no anchor takes keeps its prior and no
+/// correlation, so it changes no estimate (the Hanyang figures are the same to the last digit
+/// with 8 and 16). Settings::lag_records sizes the fixed-lag window in records (one per
+/// accepted range, one per epoch's end), allocated once at construction: 0.9 s of 4 anchors at
+/// 10 Hz is 45; `run uwb` sets it from the recording (recording.hpp, lag_records_needed).
+template <GatePolicy Gate = ChiSquareGate, bool Lagged = false, int MaxAnchors = 8>
 class CalibratedRangeEkf {
  public:
   static constexpr int N = 4 + MaxAnchors;
   using L = CalibratedLayout<MaxAnchors>;
 
   explicit CalibratedRangeEkf(const Settings& s) : CalibratedRangeEkf(s, make_gate<Gate>(s)) {}
-  CalibratedRangeEkf(const Settings& s, Gate gate) : settings_(s), gate_(gate) {
+  CalibratedRangeEkf(const Settings& s, Gate gate) : settings_(s), gate_(gate), lag_(make_lag(s)) {
     motion_.accel_psd = s.accel_psd;
     belief_.mean.setZero();
     belief_.cov.setZero();
@@ -189,7 +193,10 @@ class CalibratedRangeEkf {
   std::array<int, MaxAnchors> slot_ids_{};
   int slots_used_ = 0;
   struct NoLag {};
-  using Lag = FixedLagRts<N, LagCapacity>;
+  using Lag = FixedLagRts<N>;
+  static auto make_lag(const Settings& s) {
+    if constexpr (Lagged) return Lag(s.lag_records); else return NoLag{};
+  }
   [[no_unique_address]] std::conditional_t<Lagged, Lag, NoLag> lag_{};
   mutable std::size_t lagged_revision_ = static_cast<std::size_t>(-1);  // lag_'s, when lagged_ was made
   mutable std::conditional_t<Lagged, typename Lag::Smoothed, NoLag> lagged_{};

@@ -36,7 +36,8 @@ class ImuRangeEkf {
   using Motion = models::PlanarImuIntervalModel<kIntervalSamples>;
 
   ImuRangeEkf(const Settings& s, const ImuFusionSettings& imu)
-      : settings_(s), motion_{imu.model()}, gate_(make_gate<Gate>(s)), aligner_(imu.alignment(s)) {}
+      : settings_(s), motion_{imu.model()}, gate_(make_gate<Gate>(s)),
+        align_settings_(imu.alignment(s)), aligner_(region_imm::alignment_options(align_settings_)) {}
 
   bool started() const { return started_; }
   double time() const { return t_; }
@@ -61,7 +62,7 @@ class ImuRangeEkf {
     if (!p.allFinite() || !P.allFinite()) return Status::invalid(Problem::non_finite_measurement);
     const auto al = aligner_.add(t, p, P);
     if (!al) return Status::invalid(Problem::time_not_set);
-    belief_ = region_imm::initial_belief(*al, aligner_.settings());
+    belief_ = region_imm::initial_belief(*al, align_settings_);
     t_ = al->t;
     started_ = true;
     pieces_.drop_before(t_);
@@ -96,7 +97,8 @@ class ImuRangeEkf {
   Settings settings_;
   Motion motion_;
   Gate gate_;
-  region_imm::DynamicAligner aligner_;
+  region_imm::Settings align_settings_;  // what the aligner and the initial belief read
+  models::DynamicAligner aligner_;
   ImuPieces pieces_;
   typename Motion::Input u_;  // the interval of the latest prediction (kept: no allocation, no large stack copy)
   Gaussian<L::size> belief_;

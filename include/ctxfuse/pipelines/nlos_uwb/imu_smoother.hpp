@@ -11,7 +11,7 @@
 // rule), and a stretch without pieces is covered by the sample before it.
 //
 // Start: a planar IMU state needs a heading, which one snapshot fix does not give; start()
-// offers each fix to a dynamic aligner (pipelines/region_imm/alignment.hpp: the heading of the
+// offers each fix to a dynamic aligner (models/alignment.hpp: the heading of the
 // longest baseline of fixes > align_min_distance_m apart) and the smoother starts at the fix
 // that completes it. Until then start() refuses with Problem::time_not_set and the run loop
 // offers the next epoch's fix.
@@ -49,9 +49,10 @@ struct ImuFusionSettings {
   double accel_bias_sigma = 0.02;       // [m/s^2] turn-on bias, 1 sigma
   double gyro_bias_sigma = 8.7e-5;      // [rad/s]
   double bias_tau_s = 300.0;            // Gauss-Markov correlation time of both biases
-  // Alignment (region_imm::DynamicAligner): the heading of two snapshot fixes at least
-  // align_min_distance_m apart within align_max_span_s, once the fixes' covariances put its
-  // 1-sigma below align_max_heading_sigma_deg; the velocity over >= align_velocity_baseline_s.
+  // Alignment (models::DynamicAligner with the region pipeline's options): the heading of two
+  // snapshot fixes at least align_min_distance_m apart within align_max_span_s, once the
+  // fixes' covariances put its 1-sigma below align_max_heading_sigma_deg; the velocity over
+  // >= align_velocity_baseline_s.
   // The floors of the aligned belief: the vehicle may turn or change speed between the fixes.
   double align_min_distance_m = 5.0;
   double align_max_span_s = 10.0;
@@ -176,7 +177,8 @@ class ImuRangeSmoother {
   using Smoother = FixedLagSmoother<Motion, models::PlanarRange, K, kSlots>;
 
   ImuRangeSmoother(const Settings& s, const ImuFusionSettings& imu)
-      : settings_(s), smoother_(Motion{imu.model()}), gate_(make_gate<Gate>(s)), aligner_(imu.alignment(s)) {}
+      : settings_(s), smoother_(Motion{imu.model()}), gate_(make_gate<Gate>(s)),
+        align_settings_(imu.alignment(s)), aligner_(region_imm::alignment_options(align_settings_)) {}
 
   bool started() const { return started_; }
   double time() const { return smoother_.time(); }
@@ -202,7 +204,7 @@ class ImuRangeSmoother {
     if (!p.allFinite() || !P.allFinite()) return Status::invalid(Problem::non_finite_measurement);
     const auto al = aligner_.add(t, p, P);
     if (!al) return Status::invalid(Problem::time_not_set);
-    const Status s = smoother_.initialise(al->t, region_imm::initial_belief(*al, aligner_.settings()));
+    const Status s = smoother_.initialise(al->t, region_imm::initial_belief(*al, align_settings_));
     started_ = s.accepted();
     fresh_ = started_;
     if (started_) pieces_.drop_before(al->t);
@@ -235,7 +237,8 @@ class ImuRangeSmoother {
   Settings settings_;
   Smoother smoother_;
   Gate gate_;
-  region_imm::DynamicAligner aligner_;
+  region_imm::Settings align_settings_;  // what the aligner and the initial belief read
+  models::DynamicAligner aligner_;
   ImuPieces pieces_;
   bool started_ = false;
   bool fresh_ = false;

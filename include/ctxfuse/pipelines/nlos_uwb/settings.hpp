@@ -40,6 +40,10 @@ struct Settings {
   // The fixed-lag output of the self-calibrating EKF: the RTS-smoothed state this far behind
   // the newest range, the fixed-lag smoother's window (10 states at 10 Hz: 0.9 s).
   double smoothed_output_lag_s = 0.9;
+  // Records the fixed-lag window holds (one per accepted range, one per epoch's end; allocated
+  // once when the estimator is made): 64 covers 0.9 s of up to 6 anchors at 10 Hz; `run uwb`
+  // sets it from the recording's anchors and rates (recording.hpp, lag_window_records).
+  int lag_records = 64;
 
   // --- Tag geometry ------------------------------------------------------------------------
   // The tag rides a known height above the reference frame's ground: the dataset authors'
@@ -107,6 +111,7 @@ struct Settings {
     if (range_average_samples < 1 || range_average_samples > 100) return "range_average_samples must be in 1..100";
     if (!positive(range_period_s)) return "range_period_s must be finite and > 0";
     if (!(std::isfinite(smoothed_output_lag_s) && smoothed_output_lag_s >= 0.0)) return "smoothed_output_lag_s must be finite and >= 0";
+    if (lag_records < 2 || lag_records > 1'000'000) return "lag_records must be in 2..1000000";
     if (!positive(accel_psd)) return "accel_psd must be finite and > 0";
     if (!positive(initial_speed_sigma_mps)) return "initial_speed_sigma_mps must be finite and > 0";
     if (!positive(max_speed_mps)) return "max_speed_mps must be finite and > 0";

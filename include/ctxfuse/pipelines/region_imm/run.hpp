@@ -43,8 +43,8 @@ struct Runner {
   Est& est;
   const Settings& s;
   const std::optional<KnownMotion>& known;
-  DynamicAligner gnss_aligner{s};
-  DynamicAligner uwb_aligner{s};
+  models::DynamicAligner gnss_aligner{alignment_options(s)};
+  models::DynamicAligner uwb_aligner{alignment_options(s)};
   std::vector<io::UwbRange> stamp{};  // before the start: the ranges of the latest stamp
   bool started = false;
   std::optional<Alignment> alignment{};
