@@ -96,8 +96,9 @@ TEST(GinsPipeline, RowsAtEveryFixAndTheOutageWithheld) {
   ASSERT_EQ(r.windows.size(), 1u);
   const double first = recording().fixes.front().t;
   EXPECT_DOUBLE_EQ(r.windows[0].start, first + 20.0);
-  // Aligned on the second fix kept at 1 Hz (1 s after the first, 10 m apart).
-  EXPECT_DOUBLE_EQ(r.alignment_time, first + 1.0);
+  // Aligned on the first fix: it moves at 10 m/s and reports its velocity to 2 cm/s (a heading
+  // sigma of 0.1 deg).
+  EXPECT_DOUBLE_EQ(r.alignment_time, first);
   // One row per fix from the alignment on (no constraint epochs without constraints), but for
   // the last fix, which comes at the end of the last IMU sample's interval: the replay has
   // nothing to propagate it with.
@@ -112,9 +113,9 @@ TEST(GinsPipeline, RowsAtEveryFixAndTheOutageWithheld) {
     }
     used += row.gnss_used ? 1 : 0;
   }
-  // 1 Hz from the alignment (first + 1 s) to the last kept fix (first + 79 s), less the 15 in
-  // the outage; every one accepted by the gate.
-  EXPECT_EQ(used, 79u - 15u);
+  // 1 Hz from the alignment (the first fix) to the last kept fix (first + 79 s), less the 15
+  // in the outage; every one accepted by the gate.
+  EXPECT_EQ(used, 80u - 15u);
   EXPECT_EQ(r.counts.gnss_used, used - 1);  // the alignment fix starts the filter, no update
   EXPECT_EQ(r.counts.gnss_gated, 0u);
   EXPECT_EQ(r.counts.gnss_withheld, 15u);
@@ -129,9 +130,13 @@ TEST(GinsPipeline, ConstraintsCutTheOutageErrorAndRtsCutsItFurther) {
   const auto e_none = errors(none, none.forward), e_both = errors(both, both.forward), e_rts = errors(both, both.smoothed);
   ASSERT_EQ(e_none.epochs, 60u);
   ASSERT_EQ(e_both.epochs, 60u);
-  EXPECT_GT(both.counts.zupt, 0u);
+  // The drive's one stop (25-30 s) lies inside the outage, where the filter's speed has drifted
+  // by more than static_max_speed_mps (0.1 m/s): a still IMU is then not taken for a stop (a
+  // steady platform reads as still too), so no ZUPT; NHC alone bounds the drift.
+  EXPECT_EQ(both.counts.zupt, 0u);
+  EXPECT_GT(both.counts.static_but_moving, 0u);
   EXPECT_GT(both.counts.nhc, 0u);
-  EXPECT_LT(e_both.rms, 0.3 * e_none.rms) << e_both.rms << " vs " << e_none.rms;
+  EXPECT_LT(e_both.rms, 0.45 * e_none.rms) << e_both.rms << " vs " << e_none.rms;
   EXPECT_LT(e_rts.rms, 0.2 * e_both.rms) << e_rts.rms << " vs " << e_both.rms;
   ASSERT_TRUE(both.smooth_status.accepted());
   ASSERT_EQ(both.smoothed.size(), both.forward.size());
