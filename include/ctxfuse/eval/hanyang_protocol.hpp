@@ -168,6 +168,40 @@ struct ProtocolRmse {
   double t_begin = std::nan(""), t_end = std::nan("");
 };
 
+namespace detail {
+
+/// 2-D RMSE of the estimates with times in [out.t_begin, out.t_end] against `ref` (at least one
+/// sample, time order), interpolated linearly to each estimate's time and held at its ends;
+/// with `errors`, each estimate's error (NaN where not scored).
+inline void accumulate_rmse_2d(std::span<const TimedPoint2> estimates, std::span<const io::HanyangReferencePose> ref,
+                               ProtocolRmse& out, std::vector<double>* errors) {
+  if (errors) errors->assign(estimates.size(), std::nan(""));
+  double sq = 0.0;
+  std::size_t j = 0;
+  for (std::size_t k = 0; k < estimates.size(); ++k) {
+    const TimedPoint2& e = estimates[k];
+    if (!(e.t >= out.t_begin && e.t <= out.t_end)) continue;
+    Eigen::Vector2d r;
+    if (e.t <= ref.front().t) {
+      r = ref.front().position.head<2>();
+    } else if (e.t >= ref.back().t) {
+      r = ref.back().position.head<2>();
+    } else {
+      if (k > 0 && e.t < estimates[k - 1].t) j = 0;  // out of time order: search again
+      while (ref[j + 1].t < e.t) ++j;
+      const double a = (e.t - ref[j].t) / (ref[j + 1].t - ref[j].t);
+      r = (1.0 - a) * ref[j].position.head<2>() + a * ref[j + 1].position.head<2>();
+    }
+    const double e2 = (e.p - r).squaredNorm();
+    if (errors) (*errors)[k] = std::sqrt(e2);
+    sq += e2;
+    ++out.scored;
+  }
+  if (out.scored > 0) out.rmse_2d = std::sqrt(sq / static_cast<double>(out.scored));
+}
+
+}  // namespace detail
+
 /// The authors' 2-D RMSE of `estimates` (time order) against `reference`; with `errors`, also
 /// each estimate's own 2-D error, the numbers the RMSE aggregates (NaN outside the span). Throws
 /// std::invalid_argument naming find_span's problem when the reference does not fit the span.
@@ -182,28 +216,7 @@ inline ProtocolRmse hanyang_rmse_2d(std::span<const TimedPoint2> estimates, std:
   ProtocolRmse out;
   out.t_begin = reference[i0].t;
   out.t_end = reference[i1].t;
-  double sq = 0.0;
-  std::size_t j = 0;
-  if (errors) errors->assign(estimates.size(), std::nan(""));
-  for (std::size_t k = 0; k < estimates.size(); ++k) {
-    const TimedPoint2& e = estimates[k];
-    if (e.t < out.t_begin || e.t > out.t_end) continue;
-    Eigen::Vector2d ref;
-    if (e.t <= kept.front().t) {
-      ref = kept.front().position.head<2>();
-    } else if (e.t >= kept.back().t) {
-      ref = kept.back().position.head<2>();
-    } else {
-      while (kept[j + 1].t < e.t) ++j;  // estimates in time order: j only moves forward
-      const double a = (e.t - kept[j].t) / (kept[j + 1].t - kept[j].t);
-      ref = (1.0 - a) * kept[j].position.head<2>() + a * kept[j + 1].position.head<2>();
-    }
-    const double e2 = (e.p - ref).squaredNorm();
-    if (errors) (*errors)[k] = std::sqrt(e2);
-    sq += e2;
-    ++out.scored;
-  }
-  if (out.scored > 0) out.rmse_2d = std::sqrt(sq / static_cast<double>(out.scored));
+  detail::accumulate_rmse_2d(estimates, kept, out, errors);
   return out;
 }
 
@@ -217,22 +230,7 @@ inline ProtocolRmse plain_rmse_2d(std::span<const TimedPoint2> estimates, std::s
   ProtocolRmse out;
   out.t_begin = reference.front().t;
   out.t_end = reference.back().t;
-  if (errors) errors->assign(estimates.size(), std::nan(""));
-  double sq = 0.0;
-  std::size_t j = 0;
-  for (std::size_t k = 0; k < estimates.size(); ++k) {
-    const TimedPoint2& e = estimates[k];
-    if (!(e.t >= out.t_begin && e.t <= out.t_end)) continue;
-    if (k > 0 && e.t < estimates[k - 1].t) j = 0;  // out of time order: search again
-    while (j + 2 < reference.size() && reference[j + 1].t < e.t) ++j;
-    const double a = (e.t - reference[j].t) / (reference[j + 1].t - reference[j].t);
-    const Eigen::Vector2d ref = (1.0 - a) * reference[j].position.head<2>() + a * reference[j + 1].position.head<2>();
-    const double e2 = (e.p - ref).squaredNorm();
-    if (errors) (*errors)[k] = std::sqrt(e2);
-    sq += e2;
-    ++out.scored;
-  }
-  if (out.scored > 0) out.rmse_2d = std::sqrt(sq / static_cast<double>(out.scored));
+  detail::accumulate_rmse_2d(estimates, reference, out, errors);
   return out;
 }
 

@@ -52,20 +52,6 @@ inline Eigen::Matrix3d body_from_imu(const Installation& inst) {
 }
 
 
-/// The GNSS/INS alignment (models/alignment.hpp): the receiver's velocity or a straight
-/// baseline, floored by the start's sigmas.
-inline models::AlignmentOptions alignment_options(const Settings& s) {
-  models::AlignmentOptions o;
-  o.max_span_s = s.alignment_max_span_s;
-  o.min_distance_m = s.alignment_min_distance_m;
-  o.max_heading_sigma = s.alignment_max_heading_sigma;
-  o.velocity_baseline_s = 1.0;
-  o.straight_track = true;
-  o.velocity_sigma_floor_mps = s.initial_velocity_sigma;
-  o.heading_sigma_floor = s.initial_heading_sigma;
-  return o;
-}
-
 struct PassCounts {
   std::size_t imu_steps = 0, imu_refused = 0, filter_failures = 0;
   std::size_t gnss_used = 0, gnss_withheld = 0, gnss_decimated = 0, gnss_gated = 0, gnss_refused = 0, gnss_released = 0;
@@ -86,7 +72,7 @@ class ForwardPass {
               double gnss_rate_hz)
       : s_(s), c_(c), windows_(std::move(windows)), decimator_(gnss_rate_hz),
         detector_(s.static_window_s, s.static_gyro_threshold, s.static_accel_threshold), gate_(s.gate_probability),
-        align_(alignment_options(s)) {
+        align_(alignment_options(s)), speeds_(s.static_max_speed_mps, s.static_gnss_hold_s) {
     Nav15* nav = nullptr;
     if constexpr (requires { model_.base; }) nav = &model_.base; else nav = &model_;
     nav->gyro_noise_density = s.gyro_noise_density;
@@ -166,14 +152,10 @@ class ForwardPass {
       horizontal = (x.get<"theta">() * (f - x.get<"ba">())).head<2>();
     }
     const bool still = detector_.push(u.t, w, f, horizontal);
-    // An IMU cannot tell steady straight motion from rest (a smooth robot at 0.3 m/s reads as
-    // still): once aligned, static also needs the filter's horizontal speed, and the latest
-    // used GNSS velocity if it is under static_gnss_hold_s old, below static_max_speed_mps.
+    // Once aligned, a still IMU is static only at a speed near zero (SpeedEvidence).
     bool st = still;
     if (still && aligned_) {
-      const double speed = nav_part<Model>(belief_.nominal).template get<"v">().template head<2>().norm();
-      const bool gnss_says_moving = gnss_moving_ && u.t - gnss_motion_t_ < s_.static_gnss_hold_s;
-      st = !gnss_says_moving && speed <= s_.static_max_speed_mps;
+      st = speeds_.allow_static(u.t, nav_part<Model>(belief_.nominal).template get<"v">().template head<2>().norm());
       counts_.static_but_moving += st ? 0 : 1;
     }
     if (st) ++counts_.static_samples;
@@ -248,7 +230,7 @@ class ForwardPass {
     if (s_.use_gnss_velocity && fix.velocity) {
       const Eigen::Vector3d v(fix.velocity->y(), fix.velocity->x(), -fix.velocity->z());
       gnss_velocity_.R = floored(models::ned_from_enu_cov(fix.velocity_cov), s_.gnss_velocity_sigma_floor_mps);
-      note_gnss_motion(fix.t, v.head<2>());
+      speeds_.gnss_velocity(fix.t, v.head<2>());
       gnss_velocity_.gyro = gyro_body_;
       if (gnss_velocity_.R.allFinite())
         count(update_or_release<"v">(gnss_velocity_, v, velocity_gated_in_row_, counts_.velocity_released),
@@ -366,12 +348,6 @@ class ForwardPass {
     ++counts_.imu_losses;
   }
 
-  /// Whether a used GNSS velocity says the platform moves (faster than static_max_speed_mps).
-  void note_gnss_motion(double t, const Eigen::Vector2d& v) {
-    gnss_motion_t_ = t;
-    gnss_moving_ = v.norm() > s_.static_max_speed_mps;
-  }
-
   /// Offers a used fix to the aligner, in a (north, east) plane about the first fix it holds,
   /// with the receiver's velocity when the fix has one; starts the filter once it aligns.
   void try_align(const io::GnssFix& fix, const Eigen::Vector3d& z, const Eigen::Matrix3d& cov) {
@@ -403,7 +379,7 @@ class ForwardPass {
     }
     belief_ = b;
     alignment_ = *a;
-    if (pf.has_velocity) note_gnss_motion(fix.t, pf.v);
+    if (pf.has_velocity) speeds_.gnss_velocity(fix.t, pf.v);
     lost_ = false;
     aligned_ = true;
     align_t_ = fix.t;
@@ -449,9 +425,7 @@ class ForwardPass {
   double sample_t_ = NAN, sample_elapsed_ = 0.0, unmeasured_ = 0.0;
   bool lost_ = false, imu_back_ = false;
   bool align_empty_ = true;
-  // The latest used GNSS velocity: whether it said the platform moves, and its time.
-  bool gnss_moving_ = false;
-  double gnss_motion_t_ = -INFINITY;
+  SpeedEvidence speeds_;
 };
 
 }  // namespace ctxfuse::pipelines::gins

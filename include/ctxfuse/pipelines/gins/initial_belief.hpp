@@ -31,6 +31,20 @@ models::NavState nav_part(const typename Model::State& x) {
   if constexpr (requires { Model::base_part(x); }) return Model::base_part(x); else return x;
 }
 
+/// The GNSS/INS alignment (models/alignment.hpp): the receiver's velocity or a straight
+/// baseline, floored by the start's sigmas.
+inline models::AlignmentOptions alignment_options(const Settings& s) {
+  models::AlignmentOptions o;
+  o.max_span_s = s.alignment_max_span_s;
+  o.min_distance_m = s.alignment_min_distance_m;
+  o.max_heading_sigma = s.alignment_max_heading_sigma;
+  o.velocity_baseline_s = 1.0;
+  o.straight_track = true;
+  o.velocity_sigma_floor_mps = s.initial_velocity_sigma;
+  o.heading_sigma_floor = s.initial_heading_sigma;
+  return o;
+}
+
 /// a: the alignment in the (north, east) plane (position, horizontal velocity, heading = NED
 /// yaw, with their covariances); fix, z [rad, rad, m], cov [m^2, NED]: the fix that completed
 /// it; gnss_lever: IMU to antenna, nhc_lever: IMU to the NHC point (body axes); start: the

@@ -18,6 +18,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 
 namespace ctxfuse::pipelines::gins {
 
@@ -99,6 +100,29 @@ class VibrationStaticDetector {
   std::size_t seen_ = 0;
   int window_ = 0, first_ = 0, count_ = 0;
   bool static_ = false, entered_ = false;
+};
+
+/// Whether a still IMU may be taken for rest. An IMU cannot tell steady straight motion from
+/// rest (a smooth robot at 0.3 m/s reads as still): static also needs the filter's horizontal
+/// speed, and the latest used GNSS velocity if it is under `gnss_hold_s` old, below
+/// `max_speed` (pipelines/gins/settings.hpp, static_max_speed_mps).
+class SpeedEvidence {
+ public:
+  SpeedEvidence(double max_speed, double gnss_hold_s) : max_speed_(max_speed), hold_s_(gnss_hold_s) {}
+  /// A used GNSS velocity (horizontal) at time t.
+  void gnss_velocity(double t, const Eigen::Vector2d& v) {
+    gnss_t_ = t;
+    gnss_moving_ = v.norm() > max_speed_;
+  }
+  bool allow_static(double t, double filter_speed) const {
+    const bool gnss_says_moving = gnss_moving_ && t - gnss_t_ < hold_s_;
+    return !gnss_says_moving && filter_speed <= max_speed_;
+  }
+
+ private:
+  double max_speed_, hold_s_;
+  double gnss_t_ = -std::numeric_limits<double>::infinity();
+  bool gnss_moving_ = false;
 };
 
 /// Allan deviation of a 3-axis stream at one cluster time tau, from non-overlapping clusters
