@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -51,6 +52,13 @@ void check_platform(const std::string& platform, double max_rms_m) {
   EXPECT_EQ(b.at("platform").get<std::string>(), platform);
   EXPECT_EQ(b.at("constraints").get<std::string>(), platform == "pedestrian" ? "zupt" : "zupt,nhc");
   EXPECT_TRUE(b.at("alignment").at("levelled_on_static_start").get<bool>());
+  // The static test's thresholds from the recording's own 10-12 s at rest: the simulated IMU's
+  // white noise (0.0038 deg/s/sqrt(Hz) is the floor) gives far less than the fallback's 0.25.
+  const auto& th = b.at("static_thresholds");
+  EXPECT_EQ(th.at("source").get<std::string>(), "static start");
+  EXPECT_LT(th.at("gyro_dps").get<double>(), 0.25);
+  EXPECT_GT(th.at("gyro_dps").get<double>(), 4.03 * 0.0038 / std::sqrt(0.5));
+  EXPECT_LT(th.at("accel_mps2").get<double>(), 0.25);
   EXPECT_EQ(b.at("imu_time_mapping").at("method").get<std::string>(), "scaled");
   // The simulated clock runs 40 ppm fast; the tag's mapping sees that and the start latency.
   EXPECT_LT(std::abs(b.at("imu_time_mapping").at("scale_ppm").get<double>()), 100.0);

@@ -314,7 +314,24 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
     for (int i = 0; i < 3; ++i) a.push_back(v(i) * scale);
     st[k] = std::move(a);
   }
+  st["window_s"] = ss.window_s;
+  st["window_differences"] = ss.window_differences;
+  Json aw = Json::array();
+  for (int i = 0; i < 3; ++i) aw.push_back(ss.gyro_allan_window(i) * d);
+  st["gyro_allan_window_dps"] = std::move(aw);
+  st["f_window_std_mean_mps2"] = ss.f_window_std_mean;
+  st["f_window_std_std_mps2"] = ss.f_window_std_std;
+  st["f_windows"] = ss.f_windows;
   doc["static_start"] = std::move(st);
+  const auto& th = res.static_thresholds;
+  Json thj;
+  thj["source"] = th.from_start ? "static start" : "fallback";
+  thj["gyro_dps"] = th.gyro * d;
+  thj["accel_mps2"] = th.accel;
+  Json bias = Json::array();
+  for (int i = 0; i < 3; ++i) bias.push_back(th.gyro_bias(i) * d);
+  thj["gyro_bias_dps"] = std::move(bias);
+  doc["static_thresholds"] = std::move(thj);
   // Scoring, apart from the run: the reference's RTK-fixed epochs (--reference, else with
   // --outage the recording's own .pos).
   eval::GinsOutageScores sc;

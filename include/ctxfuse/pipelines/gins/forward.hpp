@@ -71,8 +71,13 @@ class ForwardPass {
   ForwardPass(const Settings& s, const Installation& inst, const Constraints& c, std::vector<OutageWindow> windows,
               double gnss_rate_hz)
       : s_(s), c_(c), windows_(std::move(windows)), decimator_(gnss_rate_hz),
-        detector_(s.static_window_s, s.static_gyro_threshold, s.static_accel_threshold), gate_(s.gate_probability),
-        align_(alignment_options(s)), speeds_(s.static_max_speed_mps, s.static_gnss_hold_s) {
+        detector_(s.static_window_s, s.static_gyro_threshold, s.static_accel_threshold, s.static_accel_threshold),
+        gate_(s.gate_probability),
+        align_(alignment_options(s)),
+        start_acc_(s.static_window_s),
+        speeds_(s.static_max_speed_mps, s.static_gnss_hold_s) {
+    thresholds_.gyro = s.static_gyro_threshold;
+    thresholds_.accel = s.static_accel_threshold;
     Nav15* nav = nullptr;
     if constexpr (requires { model_.base; }) nav = &model_.base; else nav = &model_;
     nav->gyro_noise_density = s.gyro_noise_density;
@@ -249,6 +254,8 @@ class ForwardPass {
   const models::PlanarAlignment& alignment() const { return alignment_; }
   const PassCounts& counts() const { return counts_; }
   const StaticStats& static_start() const { return start_; }
+  /// The static test's thresholds in force: the fallback, or from the static start once aligned.
+  const StaticThresholds& static_thresholds() const { return thresholds_; }
   RtsRecorder<Model>& recorder() { return rts_; }
   const std::vector<char>& gnss_used_per_epoch() const { return used_; }
   const Model& model() const { return model_; }
@@ -376,6 +383,16 @@ class ForwardPass {
     } else {
       rts_.start(fix.t, b);
       used_.assign(1, 1);
+      // The static start is over: its statistics set the static test's thresholds.
+      const auto t = s_.static_thresholds_from_start
+                         ? static_thresholds_from_rest(start_, detector_.window_samples(), s_.static_calibration_min_s,
+                                                       s_.static_false_alarm, s_.static_gyro_floor_density,
+                                                       s_.static_accel_floor_density)
+                         : std::nullopt;
+      if (t) {
+        thresholds_ = *t;
+        detector_.calibrate(t->gyro, t->accel, t->gyro_bias);
+      }
     }
     belief_ = b;
     alignment_ = *a;
@@ -415,6 +432,7 @@ class ForwardPass {
   Eigen::Vector3d gyro_body_ = Eigen::Vector3d::Zero();
   StaticAccumulator start_acc_;
   StaticStats start_{};
+  StaticThresholds thresholds_{};
   PassCounts counts_{};
   std::function<void(double)> progress_;
   double t_first_ = 0.0, t_span_ = 1.0;

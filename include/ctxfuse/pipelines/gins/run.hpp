@@ -91,6 +91,7 @@ struct RunResult {
   std::vector<OutageWindow> windows;
   PassCounts counts;
   StaticStats static_start;
+  StaticThresholds static_thresholds;  // the static test's, from the static start or the fallback
   double imu_rate_hz = 0.0;  // samples / span of the IMU stream
   bool aligned = false;
   double alignment_time = 0.0;
@@ -135,6 +136,7 @@ RunResult run(std::span<const io::ImuSample> imu_raw, std::span<const io::GnssFi
   pass.finish();
   out.counts = pass.counts();
   out.static_start = pass.static_start();
+  out.static_thresholds = pass.static_thresholds();
   out.aligned = pass.aligned();
   out.alignment_time = pass.alignment_time();
   out.alignment = pass.alignment();

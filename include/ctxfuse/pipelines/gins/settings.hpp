@@ -132,11 +132,24 @@ struct Settings {
   // Applied every constraint_interval_s (10 Hz: the car's suspension and steering change the
   // violation at a few Hz; faster updates would treat correlated violations as white).
   double constraint_interval_s = 0.1;
-  // Static detection (static_start.hpp): the window in seconds, upstream's ZUPT window and
-  // thresholds (data README: 50 epochs of its 100 Hz IMU, 0.25 m/s^2, 0.25 deg/s).
+  // Static detection (static_start.hpp): the window in seconds, upstream's ZUPT window (data
+  // README: 50 epochs of its 100 Hz IMU). The thresholds on the window's mean rate and std of
+  // |f| come from the recording's own static start, once it has lasted
+  // static_calibration_min_s (static_thresholds_from_rest: a window at rest fails each test
+  // with probability static_false_alarm, floored by the data sheet's white noise, 0.0038
+  // deg/s/sqrt(Hz) and 70 ug/sqrt(Hz)). Until then, and for a whole recording that starts
+  // moving or whose start is shorter, upstream's thresholds (0.25 deg/s, 0.25 m/s^2) are the
+  // fallback; they find the static start in the first place. The mean horizontal acceleration
+  // test keeps static_accel_threshold: it separates steady braking (1-2 m/s^2) from rest, a
+  // property of the motion, not of the IMU's noise (0.25 m/s^2 is also a 1.5 deg tilt error).
   double static_window_s = 0.5;
   double static_accel_threshold = 0.25;
   double static_gyro_threshold = 0.25 * kDeg;
+  bool static_thresholds_from_start = true;
+  double static_calibration_min_s = 5.0;
+  double static_false_alarm = 1e-3;
+  double static_gyro_floor_density = 0.0038 * kDeg;               // [rad/s/sqrt(Hz)]
+  double static_accel_floor_density = 70e-6 * kStandardGravity;   // [m/s^2/sqrt(Hz)]
   // Steady straight motion reads as still to an IMU (a smooth robot at 0.3 m/s): a still IMU
   // is static only while the filter's horizontal speed, and the latest used GNSS velocity if
   // it is under static_gnss_hold_s old, are below static_max_speed_mps (forward.hpp). A ZUPT

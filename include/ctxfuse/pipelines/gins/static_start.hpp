@@ -10,6 +10,12 @@
 // as a stop (|f| changes by 0.2 m/s^2 at 2 m/s^2), the levelled acceleration does not. The
 // window is given in seconds and held as the number of samples the IMU's own rate puts in it,
 // so it means the same at 50 or 400 Hz. Fixed storage, nothing allocates per sample.
+//
+// The thresholds come from the recording's own static start (static_thresholds_from_rest):
+// the detector starts on fallback figures (upstream's ZUPT thresholds) that find the start, and
+// the start's statistics then set what a window at rest may show on this IMU on this platform
+// (an idling engine, a hand's tremor, a rigid robot): the spread of the window-mean rate about
+// the start's mean (its Allan deviation at the window's length) and of the window std of |f|.
 #pragma once
 
 #include <Eigen/Core>
@@ -19,14 +25,34 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <optional>
+
+#include "ctxfuse/core/numerics.hpp"
 
 namespace ctxfuse::pipelines::gins {
 
 class VibrationStaticDetector {
  public:
   static constexpr int kCapacity = 512;  // samples in a window: 1.28 s at 400 Hz
+  /// gyro_threshold on the window's mean rate (less the bias given by calibrate), accel_threshold
+  /// on the window's std of |f|, horizontal_threshold on its mean horizontal acceleration.
+  VibrationStaticDetector(double window_s, double gyro_threshold, double accel_threshold, double horizontal_threshold)
+      : window_s_(window_s),
+        gyro_threshold_(gyro_threshold),
+        accel_threshold_(accel_threshold),
+        horizontal_threshold_(horizontal_threshold) {}
   VibrationStaticDetector(double window_s, double gyro_threshold, double accel_threshold)
-      : window_s_(window_s), gyro_threshold_(gyro_threshold), accel_threshold_(accel_threshold) {}
+      : VibrationStaticDetector(window_s, gyro_threshold, accel_threshold, accel_threshold) {}
+
+  /// New thresholds and the rate bias to take off the window's mean rate (from the static
+  /// start, static_thresholds_from_rest); the window's samples are kept.
+  void calibrate(double gyro_threshold, double accel_threshold, const Eigen::Vector3d& gyro_bias) {
+    gyro_threshold_ = gyro_threshold;
+    accel_threshold_ = accel_threshold;
+    gyro_bias_ = gyro_bias;
+  }
+  double gyro_threshold() const { return gyro_threshold_; }
+  double accel_threshold() const { return accel_threshold_; }
 
   /// One raw sample at time t (rates in any axes) and the horizontal acceleration in the
   /// navigation frame (zero while there is no attitude). Returns whether the window is static
@@ -66,8 +92,8 @@ class VibrationStaticDetector {
     if (window_ > 0 && count_ == window_) {
       const double n = window_;
       const double var = std::max(0.0, sum_f2_ / n - (sum_f_ / n) * (sum_f_ / n));
-      now = (sum_gyro_ / n).norm() < gyro_threshold_ && std::sqrt(var) < accel_threshold_ &&
-            (sum_h_ / n).norm() < accel_threshold_;
+      now = (sum_gyro_ / n - gyro_bias_).norm() < gyro_threshold_ && std::sqrt(var) < accel_threshold_ &&
+            (sum_h_ / n).norm() < horizontal_threshold_;
     }
     entered_ = now && !static_;
     static_ = now;
@@ -89,7 +115,8 @@ class VibrationStaticDetector {
     --count_;
   }
   double window_s_;
-  double gyro_threshold_, accel_threshold_;
+  double gyro_threshold_, accel_threshold_, horizontal_threshold_;
+  Eigen::Vector3d gyro_bias_ = Eigen::Vector3d::Zero();
   std::array<Eigen::Vector3d, kCapacity> gyro_{};
   std::array<Eigen::Vector2d, kCapacity> h_{};
   std::array<double, kCapacity> f_{};
@@ -189,10 +216,66 @@ struct StaticStats {
   Eigen::Vector3d accel_mean = Eigen::Vector3d::Zero(), accel_std = Eigen::Vector3d::Zero();
   Eigen::Vector3d gyro_allan_1s = Eigen::Vector3d::Zero(), accel_allan_1s = Eigen::Vector3d::Zero();
   std::size_t allan_differences = 0;  // cluster pairs behind the Allan deviations
+  // At the static detector's window length: the Allan deviation of the rates (the spread of a
+  // window's mean rate about the start's mean) and the mean and std over the start's
+  // non-overlapping windows of the within-window std of |f|.
+  double window_s = 0.0;
+  Eigen::Vector3d gyro_allan_window = Eigen::Vector3d::Zero();
+  std::size_t window_differences = 0;
+  double f_window_std_mean = 0.0, f_window_std_std = 0.0;
+  std::size_t f_windows = 0;
+};
+
+/// Mean and std, over non-overlapping clusters of tau seconds (by the samples' stamps), of a
+/// scalar's within-cluster standard deviation. A gap longer than tau drops the open cluster.
+class ClusterStdAccumulator {
+ public:
+  explicit ClusterStdAccumulator(double tau_s) : tau_(tau_s) {}
+  void add(double t, double x) {
+    if (!std::isfinite(t) || !std::isfinite(x)) return;
+    if (n_ > 0 && (t < last_t_ || t - last_t_ > tau_)) n_ = 0;
+    if (n_ == 0) {
+      start_ = t;
+    } else if (t >= start_ + tau_) {
+      close_cluster();
+      start_ += tau_;
+      if (t >= start_ + tau_) start_ = t;
+    }
+    if (n_ == 0) sum_ = sum2_ = 0.0;
+    sum_ += x;
+    sum2_ += x * x;
+    ++n_;
+    last_t_ = t;
+  }
+  std::size_t clusters() const { return m_; }
+  double mean() const { return m_ > 0 ? s_ / static_cast<double>(m_) : 0.0; }
+  double std() const {
+    if (m_ < 2) return 0.0;
+    const double m = static_cast<double>(m_), mu = s_ / m;
+    return std::sqrt(std::max(0.0, (s2_ - m * mu * mu) / (m - 1.0)));
+  }
+
+ private:
+  void close_cluster() {
+    if (n_ >= 2) {
+      const double n = static_cast<double>(n_), mu = sum_ / n;
+      const double sd = std::sqrt(std::max(0.0, sum2_ / n - mu * mu));
+      s_ += sd;
+      s2_ += sd * sd;
+      ++m_;
+    }
+    n_ = 0;
+  }
+  double tau_;
+  double start_ = 0.0, last_t_ = 0.0, sum_ = 0.0, sum2_ = 0.0, s_ = 0.0, s2_ = 0.0;
+  std::size_t n_ = 0, m_ = 0;
 };
 
 class StaticAccumulator {
  public:
+  /// window_s: the static detector's window (StaticStats' window figures).
+  explicit StaticAccumulator(double window_s = 0.5)
+      : window_s_(window_s), allan_gyro_window_(window_s), f_windows_(window_s) {}
   void add(double t, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel) {
     if (n_ == 0) t0_ = t;
     t1_ = t;
@@ -203,8 +286,10 @@ class StaticAccumulator {
     saa_ += accel.cwiseAbs2();
     allan_gyro_.add(t, gyro);
     allan_accel_.add(t, accel);
+    allan_gyro_window_.add(t, gyro);
+    f_windows_.add(t, accel.norm());
   }
-  void clear() { *this = StaticAccumulator{}; }
+  void clear() { *this = StaticAccumulator{window_s_}; }
   std::size_t samples() const { return n_; }
   StaticStats stats() const {
     StaticStats s;
@@ -219,6 +304,12 @@ class StaticAccumulator {
     s.gyro_allan_1s = allan_gyro_.deviation();
     s.accel_allan_1s = allan_accel_.deviation();
     s.allan_differences = allan_gyro_.differences();
+    s.window_s = window_s_;
+    s.gyro_allan_window = allan_gyro_window_.deviation();
+    s.window_differences = allan_gyro_window_.differences();
+    s.f_window_std_mean = f_windows_.mean();
+    s.f_window_std_std = f_windows_.std();
+    s.f_windows = f_windows_.clusters();
     return s;
   }
 
@@ -227,7 +318,55 @@ class StaticAccumulator {
   double t0_ = 0.0, t1_ = 0.0;
   Eigen::Vector3d sg_ = Eigen::Vector3d::Zero(), sgg_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d sa_ = Eigen::Vector3d::Zero(), saa_ = Eigen::Vector3d::Zero();
-  AllanAccumulator allan_gyro_{1.0}, allan_accel_{1.0};
+  double window_s_;
+  AllanAccumulator allan_gyro_{1.0}, allan_accel_{1.0}, allan_gyro_window_;
+  ClusterStdAccumulator f_windows_;
 };
+
+/// The static test's thresholds and where they came from.
+struct StaticThresholds {
+  double gyro = 0.0;   // on |window mean rate - gyro_bias| [rad/s]
+  double accel = 0.0;  // on a window's std of |f| [m/s^2]
+  Eigen::Vector3d gyro_bias = Eigen::Vector3d::Zero();
+  bool from_start = false;  // from the recording's static start (else the fallback figures)
+};
+
+/// Thresholds that a window at rest on this IMU fails with probability false_alarm each, from
+/// the static start's statistics (StaticStats), or nothing when the start is shorter than
+/// min_duration_s or holds fewer than 4 windows:
+///  - rate: the window's mean rate less the start's mean is, at rest, a 3-vector whose per-axis
+///    spread is the Allan deviation at the window's length (IEEE Std 952: half the mean square
+///    of successive cluster means' differences), here the largest axis', raised to its one-sided
+///    95 % upper confidence bound from the m differences behind it (sigma x sqrt(m /
+///    chi2_0.05(m))); threshold sqrt(chi2_{1-false_alarm}(3)) times that;
+///  - |f|: the start's windows' std of |f|, mean + z_{1-false_alarm} x std over those windows
+///    (vibration included as this IMU on this platform shows it).
+/// Each is floored by what white noise of the data sheet's densities gives by the same rule
+/// (gyro_floor_density [rad/s/sqrt(Hz)] over the window; accel_floor_density [m/s^2/sqrt(Hz)]
+/// at the sampling rate, window_samples / window_s), so a start quieter than the part itself
+/// (quantised, or simulated without noise) does not set a threshold that rest never passes.
+inline std::optional<StaticThresholds> static_thresholds_from_rest(const StaticStats& s, int window_samples,
+                                                                   double min_duration_s, double false_alarm,
+                                                                   double gyro_floor_density,
+                                                                   double accel_floor_density) {
+  if (!(s.duration_s >= min_duration_s) || s.window_differences < 3 || s.f_windows < 4 || window_samples < 2 ||
+      !(s.window_s > 0.0) || !(false_alarm > 0.0 && false_alarm < 0.5))
+    return std::nullopt;
+  const double m = static_cast<double>(s.window_differences);
+  const double upper = std::sqrt(m / chi_square_quantile(0.05, static_cast<int>(s.window_differences)));
+  const double k3 = std::sqrt(chi_square_quantile(1.0 - false_alarm, 3));
+  const double z = std::sqrt(chi_square_quantile(1.0 - 2.0 * false_alarm, 1));  // one-sided normal quantile
+  const double rate = static_cast<double>(window_samples) / s.window_s;
+  const double nu = static_cast<double>(window_samples - 1);
+  StaticThresholds out;
+  out.from_start = true;
+  out.gyro_bias = s.gyro_mean;
+  out.gyro = k3 * std::max(upper * s.gyro_allan_window.maxCoeff(), gyro_floor_density / std::sqrt(s.window_s));
+  const double white_f = accel_floor_density * std::sqrt(0.5 * rate);  // a sample's std at this rate
+  out.accel = std::max(s.f_window_std_mean + z * s.f_window_std_std,
+                       white_f * std::sqrt(chi_square_quantile(1.0 - false_alarm, window_samples - 1) / nu));
+  if (!std::isfinite(out.gyro) || !std::isfinite(out.accel)) return std::nullopt;
+  return out;
+}
 
 }  // namespace ctxfuse::pipelines::gins
