@@ -80,4 +80,30 @@ TEST(Multilateration, RefusalsSayWhy) {
   EXPECT_EQ(filters::multilaterate(ranges, once).status.problem, Problem::not_converged);
 }
 
+// 3-D: exact ranges to five anchors at two heights give the point (from below and from above
+// the anchors) and the textbook covariance sigma^2 (J'J)^-1 with 3-D unit directions; four
+// coplanar anchors and the tag in their plane leave z unobservable (degenerate); three ranges
+// are too few.
+TEST(Multilateration, ThreeDimensionalFitAndItsRefusals) {
+  const std::array<Eigen::Vector3d, 5> anchors{Eigen::Vector3d(0, 0, 0.5), Eigen::Vector3d(10, 0, 3), Eigen::Vector3d(10, 8, 0.5),
+                                               Eigen::Vector3d(0, 8, 3), Eigen::Vector3d(5, 9, 4)};
+  const filters::MultilaterationOptions o{.sigma_m = 0.1};
+  for (const Eigen::Vector3d truth : {Eigen::Vector3d(4, 3, 1.3), Eigen::Vector3d(7, 2, -0.4), Eigen::Vector3d(3, 6, 5.0)}) {
+    const auto snap = filters::multilaterate_3d(exact_ranges(truth, anchors), o);
+    ASSERT_TRUE(snap.ok()) << describe(snap.status.problem);
+    EXPECT_LT((snap.position - truth).norm(), 1e-9) << truth.transpose();
+    Eigen::Matrix3d JtJ = Eigen::Matrix3d::Zero();
+    for (const auto& a : anchors) {
+      const Eigen::Vector3d u = (truth - a).normalized();
+      JtJ += u * u.transpose();
+    }
+    EXPECT_LT((snap.cov - 0.01 * JtJ.inverse()).norm(), 1e-9 * snap.cov.norm());
+  }
+  // All anchors at 3 m and the tag at 3 m: every direction horizontal, no vertical information.
+  const auto flat = filters::multilaterate_3d(exact_ranges(Eigen::Vector3d(4, 3, 3), kAnchors), o);
+  EXPECT_EQ(flat.status.problem, Problem::degenerate_geometry);
+  const auto three = filters::multilaterate_3d(exact_ranges(Eigen::Vector3d(4, 3, 1), std::span(kAnchors).first(3)), o);
+  EXPECT_EQ(three.status.problem, Problem::too_few_measurements);
+}
+
 }  // namespace

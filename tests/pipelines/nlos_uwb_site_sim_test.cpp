@@ -117,6 +117,44 @@ TEST(UwbSite, RecordingFactsFindPeriodAndAveraging) {
   EXPECT_NE(problem.find("2 anchors"), std::string::npos) << problem;
 }
 
+// The tag's height from the static start: with two anchors overhead (on a ceiling) the fit
+// observes it (vertical sigma under 0.1 m) and the settings take it; the yard's eight anchors
+// alone (0.5 and 2 m high, 11-15 m away, 0.1-0.3 m biases) leave it to the default, which the
+// source says, and an option overrides both.
+TEST(UwbSite, TagHeightFromTheStaticStartWhenTheAnchorsObserveIt) {
+  sim::WalkConfig w;
+  w.walk_s = 20.0;
+  w.tag_height_m = 1.4;
+  const auto path = sim::pedestrian_walk(w);  // at rest at (10, 10) for 10 s
+  sim::UwbSiteConfig c;
+  c.anchors = yard_anchors(10.0);
+  for (auto& a : c.anchors) a.bias_m = 0.0;
+  c.anchors.push_back({9, {9.5, 10.0, 4.0}, 10.0, 0.0, 0.0});
+  c.anchors.push_back({10, {10.5, 10.0, 4.0}, 10.0, 0.0, 0.0});
+  const auto f = nu::describe_recording(sim::simulate_uwb_site(path, c));
+  ASSERT_TRUE(std::isfinite(f.tag_height_m)) << f.tag_height_note;
+  const nu::Settings def;
+  const double sigma = f.tag_height_vdop * def.range_sigma_m;
+  EXPECT_LT(sigma, def.tag_height_max_sigma_m);
+  // The median of ~70 ranges an anchor (10 Hz, 7 s) has a sigma near 0.1 x 1.25 / sqrt(70).
+  EXPECT_NEAR(f.tag_height_m, 1.4, 4.0 * f.tag_height_vdop * 0.1 * 1.25 / std::sqrt(70.0)) << f.tag_height_vdop;
+  std::string problem, source;
+  nu::Settings s = nu::settings_for_recording(f, def, 0, problem, std::nan(""), &source);
+  EXPECT_EQ(problem, "");
+  EXPECT_EQ(s.tag_height_m, f.tag_height_m);
+  EXPECT_EQ(source.rfind("static start", 0), 0u) << source;
+  s = nu::settings_for_recording(f, def, 0, problem, 0.8, &source);
+  EXPECT_EQ(s.tag_height_m, 0.8);
+  EXPECT_EQ(source, "option");
+  // The yard alone, biased as in the other tests: the fit is too loose to take.
+  c.anchors = yard_anchors(10.0);
+  const auto yard = nu::describe_recording(sim::simulate_uwb_site(path, c));
+  s = nu::settings_for_recording(yard, def, 0, problem, std::nan(""), &source);
+  EXPECT_GT(yard.tag_height_vdop * def.range_sigma_m, def.tag_height_max_sigma_m);
+  EXPECT_EQ(s.tag_height_m, def.tag_height_m);
+  EXPECT_EQ(source.rfind("default", 0), 0u) << source;
+}
+
 // Rates of 1 to 100 Hz in one recording: each anchor's period found, the epoch window from the
 // fastest, and the self-calibrating EKF still tracks the walk.
 TEST(UwbSite, MixedRatesOneToHundredHertz) {

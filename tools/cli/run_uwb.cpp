@@ -42,7 +42,7 @@ struct UwbOptions {
   std::string policy = "per-range";
   std::vector<std::string> train;
   std::string nlos_model, save_nlos_model, reference, span = "auto", range_average = "auto";
-  double tag_height_m = nu::Settings{}.tag_height_m;
+  std::string tag_height = "auto";
 };
 
 std::shared_ptr<void> add_options(CLI::App& app) {
@@ -75,10 +75,22 @@ std::shared_ptr<void> add_options(CLI::App& app) {
           },
           "auto|N", "range average"))
       ->capture_default_str();
-  app.add_option("--tag-height", o->tag_height_m,
-                 "the tag antenna's height in the anchors' frame [m] (the files do not give it; 1 m: the Hanyang authors' "
-                 "protocol compares z with reference z + 1)")
-      ->check(CLI::Range(-1e4, 1e4))
+  app.add_option("--tag-height", o->tag_height,
+                 "the tag antenna's height in the anchors' frame [m], or auto: fitted to the static start when the anchors' "
+                 "heights observe it (vertical sigma <= 0.1 m), else 1 m (the Hanyang authors' protocol compares z with "
+                 "reference z + 1)")
+      ->check(CLI::Validator(
+          [](std::string& s) {
+            if (s == "auto") return std::string();
+            try {
+              std::size_t used = 0;
+              const double v = std::stod(s, &used);
+              if (used == s.size() && std::isfinite(v) && std::abs(v) <= 1e4) return std::string();
+            } catch (const std::exception&) {
+            }
+            return "'" + s + "' is neither auto nor a height in [-1e4, 1e4] m";
+          },
+          "auto|M", "tag height"))
       ->capture_default_str();
   app.add_option("--reference", o->reference, "reference to score against (Hanyang trajectory.csv; default: DIR/trajectory.csv if present)")
       ->check(CLI::ExistingFile);
@@ -244,6 +256,7 @@ int run_uwb(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::os
   io::HanyangUwbCase rc;
   nu::RecordingFacts facts;
   nu::Settings settings;
+  std::string tag_height_source;
   std::optional<nu::NlosSvm> svm;
   std::string classifier_kind = "consistency-only", classifier_note;
   std::vector<std::filesystem::path> train(o.train.begin(), o.train.end());
@@ -255,10 +268,9 @@ int run_uwb(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::os
     rc = io::read_hanyang_uwb(in.data_dir);
     const auto ranges = rc.uwb_ranges();
     facts = nu::describe_recording(ranges);
-    nu::Settings base;
-    base.tag_height_m = o.tag_height_m;
     std::string problem;
-    settings = nu::settings_for_recording(facts, base, o.range_average == "auto" ? 0 : std::stoi(o.range_average), problem);
+    settings = nu::settings_for_recording(facts, nu::Settings{}, o.range_average == "auto" ? 0 : std::stoi(o.range_average), problem,
+                                          o.tag_height == "auto" ? std::nan("") : std::stod(o.tag_height), &tag_height_source);
     if (!problem.empty()) {
       err << "ctxfuse run uwb: " << in.data_dir.string() << ": " << problem << '\n';
       return 1;
@@ -323,7 +335,9 @@ int run_uwb(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::os
   js["range_average_samples"] = settings.range_average_samples;
   js["range_average_source"] = o.range_average == "auto" ? "detected" : "option";
   js["tag_height_m"] = settings.tag_height_m;
-  js["tag_height_source"] = o.tag_height_m == nu::Settings{}.tag_height_m ? "default" : "option";
+  js["tag_height_source"] = tag_height_source;
+  js["tag_height_fit_m"] = facts.tag_height_m;  // null without a fit
+  js["tag_height_fit_vertical_sigma_m"] = facts.tag_height_vdop * settings.range_sigma_m;
   js["smoothed_output_lag_s"] = settings.smoothed_output_lag_s;
   js["lag_records_needed"] = nu::lag_records_needed(facts, settings);
   js["lag_records"] = settings.lag_records;

@@ -16,6 +16,9 @@
 // estimate's standard error with 40 differences is about 0.16 per anchor, less in the mean);
 // anchors with fewer than kMinDifferences differences are left out (a slow anchor has few);
 // none left, or no such lag: not detected (raw).
+// The tag's height: a 3-D fit (filters::multilaterate_3d) of each anchor's median range over the
+// static start, with its vertical dilution of precision; settings_for_recording takes it when
+// the vertical sigma it implies is small enough (choose_tag_height).
 #pragma once
 
 #include <Eigen/Core>
@@ -28,6 +31,7 @@
 #include <string>
 #include <vector>
 
+#include "ctxfuse/filters/multilateration.hpp"
 #include "ctxfuse/io/messages.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/classifier.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/settings.hpp"
@@ -53,6 +57,10 @@ struct RecordingFacts {
   int range_average_samples = 1;
   bool averaging_detected = false;
   std::string averaging_note;  // how range_average_samples was decided
+  // The static start's 3-D fit: the tag's height, the vertical sigma per metre of range sigma
+  // (VDOP) and the fit's RMS residual; NaN when the start is under a second or the fit fails.
+  double tag_height_m = std::nan(""), tag_height_vdop = std::nan(""), tag_height_rms_m = std::nan("");
+  std::string tag_height_note;
 };
 
 inline constexpr double kStaticMoveM = 0.3;
@@ -108,6 +116,36 @@ inline void difference_autocorrelation(const std::map<int, std::map<long, double
     return;
   }
   for (double& a : f.autocorrelation) a /= used;
+}
+
+/// The static start's 3-D fit of each anchor's median range (fills facts' tag_height_*).
+inline void fit_tag_height(const std::map<int, std::vector<const io::UwbRange*>>& by_anchor, double t0, double t1,
+                           RecordingFacts& f) {
+  if (!(t1 - t0 >= 1.0)) {
+    f.tag_height_note = "static start under 1 s: no height fit";
+    return;
+  }
+  std::vector<io::UwbRange> medians;
+  for (const auto& [id, list] : by_anchor) {
+    std::vector<double> r;
+    for (const auto* x : list)
+      if (x->t < t1) r.push_back(x->range_m);
+    if (r.empty()) continue;
+    io::UwbRange m = *list.front();
+    m.range_m = median(std::move(r));
+    medians.push_back(m);
+  }
+  filters::MultilaterationOptions o;
+  o.sigma_m = 1.0;  // the covariance is then the dilution of precision squared
+  const auto fit = filters::multilaterate_3d(medians, o);
+  if (!fit.ok()) {
+    f.tag_height_note = std::string("no 3-D fit of the static start: ") + std::string(describe(fit.status.problem));
+    return;
+  }
+  f.tag_height_m = fit.position.z();
+  f.tag_height_vdop = std::sqrt(fit.cov(2, 2));
+  f.tag_height_rms_m = fit.rms_m;
+  f.tag_height_note = "3-D fit of " + std::to_string(medians.size()) + " anchors' median ranges over the static start";
 }
 
 }  // namespace detail
@@ -166,6 +204,7 @@ inline RecordingFacts describe_recording(std::span<const io::UwbRange> ranges) {
   }
   const double static_end = moves - kStaticMarginS;
   f.static_start_s = std::max(0.0, static_end - f.t_begin);
+  detail::fit_tag_height(by_anchor, f.t_begin, static_end, f);
   std::map<int, std::map<long, double>> grids;
   for (const auto& [id, list] : by_anchor) {
     const double period = f.anchors[static_cast<std::size_t>(std::distance(by_anchor.begin(), by_anchor.find(id)))].median_interval_s;
@@ -214,11 +253,32 @@ inline int lag_window_records(const RecordingFacts& facts, const Settings& s) {
   return std::max(8, static_cast<int>(std::ceil(1.25 * needed)) + 2);
 }
 
+/// The tag's height into s: `option_m` when finite ("option"); else the static start's fit
+/// when its vertical sigma, VDOP x range_sigma_m, is at most tag_height_max_sigma_m ("static
+/// start"); else s's own (default). Returns which, with the figures.
+inline std::string choose_tag_height(const RecordingFacts& facts, Settings& s, double option_m) {
+  if (std::isfinite(option_m)) {
+    s.tag_height_m = option_m;
+    return "option";
+  }
+  const double sigma = facts.tag_height_vdop * s.range_sigma_m;
+  if (std::isfinite(facts.tag_height_m) && sigma <= s.tag_height_max_sigma_m) {
+    s.tag_height_m = facts.tag_height_m;
+    return "static start (vertical sigma " + std::to_string(sigma) + " m)";
+  }
+  if (std::isfinite(sigma))
+    return "default: the static start's height fit (" + std::to_string(facts.tag_height_m) + " m) has a vertical sigma of " +
+           std::to_string(sigma) + " m, above tag_height_max_sigma_m";
+  return "default: " + facts.tag_height_note;
+}
+
 /// The pipeline's settings for a recording: `base` with the period, the epoch window and the
 /// averaging from `facts` (range_average_samples from `average_override` when it is >= 1).
 /// `problem` says why the recording cannot be run ("" when it can): fewer than 3 or more than
-/// NlosClassifier::kMaxAnchors anchors, an anchor that moves, no report period.
-inline Settings settings_for_recording(const RecordingFacts& facts, Settings base, int average_override, std::string& problem) {
+/// NlosClassifier::kMaxAnchors anchors, an anchor that moves, no report period. The tag's height
+/// by choose_tag_height (tag_height_option_m: NaN for auto); `tag_height_source` gets its answer.
+inline Settings settings_for_recording(const RecordingFacts& facts, Settings base, int average_override, std::string& problem,
+                                       double tag_height_option_m = std::nan(""), std::string* tag_height_source = nullptr) {
   problem.clear();
   const int n = static_cast<int>(facts.anchors.size());
   if (n < 3 || n > NlosClassifier::kMaxAnchors)
@@ -231,6 +291,8 @@ inline Settings settings_for_recording(const RecordingFacts& facts, Settings bas
   base.epoch_window_s = 0.5 * facts.shortest_period_s;
   base.range_average_samples = average_override >= 1 ? average_override : facts.range_average_samples;
   base.lag_records = lag_window_records(facts, base);
+  const std::string source = choose_tag_height(facts, base, tag_height_option_m);
+  if (tag_height_source) *tag_height_source = source;
   if (const std::string p = base.validate(); !p.empty()) problem = "settings: " + p;
   return base;
 }
