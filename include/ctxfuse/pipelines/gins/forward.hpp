@@ -71,7 +71,7 @@ class ForwardPass {
   ForwardPass(const Settings& s, const Installation& inst, const Constraints& c, std::vector<OutageWindow> windows,
               double gnss_rate_hz)
       : s_(s), c_(c), windows_(std::move(windows)), decimator_(gnss_rate_hz),
-        detector_(s.static_window_s, s.static_gyro_threshold, s.static_accel_threshold, s.static_accel_threshold),
+        detector_(s.static_window_s, s.static_gyro_threshold, s.static_accel_threshold),
         gate_(s.gate_probability),
         align_(alignment_options(s)),
         start_acc_(s.static_window_s),

@@ -35,14 +35,12 @@ class VibrationStaticDetector {
  public:
   static constexpr int kCapacity = 512;  // samples in a window: 1.28 s at 400 Hz
   /// gyro_threshold on the window's mean rate (less the bias given by calibrate), accel_threshold
-  /// on the window's std of |f|, horizontal_threshold on its mean horizontal acceleration.
-  VibrationStaticDetector(double window_s, double gyro_threshold, double accel_threshold, double horizontal_threshold)
+  /// on the window's std of |f| (until calibrate) and on its mean horizontal acceleration.
+  VibrationStaticDetector(double window_s, double gyro_threshold, double accel_threshold)
       : window_s_(window_s),
         gyro_threshold_(gyro_threshold),
         accel_threshold_(accel_threshold),
-        horizontal_threshold_(horizontal_threshold) {}
-  VibrationStaticDetector(double window_s, double gyro_threshold, double accel_threshold)
-      : VibrationStaticDetector(window_s, gyro_threshold, accel_threshold, accel_threshold) {}
+        horizontal_threshold_(accel_threshold) {}
 
   /// New thresholds and the rate bias to take off the window's mean rate (from the static
   /// start, static_thresholds_from_rest); the window's samples are kept.
@@ -51,8 +49,6 @@ class VibrationStaticDetector {
     accel_threshold_ = accel_threshold;
     gyro_bias_ = gyro_bias;
   }
-  double gyro_threshold() const { return gyro_threshold_; }
-  double accel_threshold() const { return accel_threshold_; }
 
   /// One raw sample at time t (rates in any axes) and the horizontal acceleration in the
   /// navigation frame (zero while there is no attitude). Returns whether the window is static
