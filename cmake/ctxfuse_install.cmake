@@ -7,9 +7,12 @@ include(CMakePackageConfigHelpers)
 set(ctxfuse_package_dir ${CMAKE_INSTALL_DATADIR}/ctxfuse/cmake)
 
 install(TARGETS ctxfuse EXPORT ctxfuseTargets)
+# Not include/ctxfuse/instances/: those headers declare what the build-tree-only compiled target
+# ctxfuse::instances (src/) defines.
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/ctxfuse
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}
-        FILES_MATCHING PATTERN "*.hpp")
+        FILES_MATCHING PATTERN "*.hpp"
+        PATTERN "instances" EXCLUDE)
 install(EXPORT ctxfuseTargets NAMESPACE ctxfuse:: DESTINATION ${ctxfuse_package_dir})
 configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/ctxfuseConfig.cmake.in
   ${PROJECT_BINARY_DIR}/ctxfuseConfig.cmake

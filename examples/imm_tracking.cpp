@@ -24,7 +24,7 @@
 
 namespace {
 using namespace ctxfuse;
-using L = Layout<Block<"p", 2>, Block<"v", 2>>;
+using L = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>>;
 
 /// Coordinated turn at a known rate omega [rad/s] (counter-clockwise positive): the velocity
 /// rotates by omega dt in each step and the position follows the arc. Its process noise is the

@@ -107,7 +107,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const Vector<2> z2 = num.matrix<2, 1>();
   if (gated) update(lin, prior, z2, gate); else update(lin, prior, z2, NoGate{});
 
-  using L = Layout<Block<"p", 2>, Block<"v", 2>>;
+  using L = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>>;
   models::RangeToPoint<L, 2> range;
   range.anchor = num.matrix<2, 1>();
   range.sigma = num.next();

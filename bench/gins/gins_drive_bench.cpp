@@ -20,7 +20,7 @@
 #include <string>
 
 #include "ctxfuse/eval/gins_outages.hpp"
-#include "gins_nav20.hpp"
+#include "ctxfuse/instances/gins_nav20.hpp"
 
 #ifndef CTXFUSE_BENCH_DATA_DIR
 #define CTXFUSE_BENCH_DATA_DIR "../shared/data"

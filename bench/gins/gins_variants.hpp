@@ -21,7 +21,7 @@ namespace gins_bench {
 using namespace ctxfuse;
 
 using Nav15 = models::InsNavModel<models::SimplifiedStrapdown>;
-using Nav20 = models::Augmented<Nav15, Block<"mount", 2>, Block<"lever", 3>>;
+using Nav20 = models::Augmented<Nav15, StateBlock<"mount", 2>, StateBlock<"lever", 3>>;
 
 constexpr double kDt = 0.01;
 constexpr double kDeg = 3.14159265358979323846 / 180.0;

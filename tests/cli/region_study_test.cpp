@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "ctxfuse/instances/region_imm.hpp"  // run() compiled once (ctxfuse::instances)
 #include "ctxfuse/eval/region_errors.hpp"
 #include "ctxfuse/pipelines/region_imm.hpp"
 #include "ctxfuse/sim/drive.hpp"

@@ -97,7 +97,7 @@ TEST(BlockSparsity, InsPatternsCoverTheirJacobians) {
 }
 
 TEST(BlockSparsity, KinematicPatternsCoverTheirJacobians) {
-  using K = Layout<Block<"v", 2>, Block<"p", 2>, Block<"c", 1>>;
+  using K = Layout<StateBlock<"v", 2>, StateBlock<"p", 2>, StateBlock<"c", 1>>;
   Vector<5> x;
   x << 1, 2, 3, 4, 5;
   models::RangeToPoint<K, 2> r;
@@ -210,7 +210,7 @@ TEST(BlockSparsity, FilterResultsDoNotDependOnDeclaredPatterns) {
 // plain-loop congruence (which skips the rows of P A' it never reads) against the dense
 // formula on random inputs.
 TEST(BlockSparsity, CongruenceOnAnIrregularPatternEqualsDense) {
-  using UL = Layout<Block<"a", 2>, Block<"b", 3>, Block<"c", 1>, Block<"d", 4>>;
+  using UL = Layout<StateBlock<"a", 2>, StateBlock<"b", 3>, StateBlock<"c", 1>, StateBlock<"d", 4>>;
   static constexpr auto pat = block_pattern<UL>({{"a", "c"}, {"a", "a", kIdentity}, {"b", "a"}, {"b", "d"},
                                                  {"b", "b", kDiagonal}, {"d", "b"}, {"d", "d", kIdentity}});
   constexpr int N = UL::size;

@@ -5,17 +5,17 @@
 namespace {
 using namespace ctxfuse;
 
-using Nav = Layout<Block<"p", 3>, Block<"v", 3>, Block<"theta", 3>>;
-using Bias = Layout<Block<"bg", 3>, Block<"ba", 3>>;
+using Nav = Layout<StateBlock<"p", 3>, StateBlock<"v", 3>, StateBlock<"theta", 3>>;
+using Bias = Layout<StateBlock<"bg", 3>, StateBlock<"ba", 3>>;
 using Full = Concat<Nav, Bias>;
-using Planar = Layout<Block<"v", 3>, Block<"p", 3>>;  // same names, other order
+using Planar = Layout<StateBlock<"v", 3>, StateBlock<"p", 3>>;  // same names, other order
 
 static_assert(Nav::size == 9 && Full::size == 15 && Full::block_count == 5);
 static_assert(Full::offset<"p">() == 0 && Full::offset<"theta">() == 6 && Full::offset<"ba">() == 12);
 static_assert(Full::size_of<"bg">() == 3);
 static_assert(Full::contains("bg") && !Nav::contains("bg"));
-static_assert(std::is_same_v<Concat<Nav, Bias>, Layout<Block<"p", 3>, Block<"v", 3>, Block<"theta", 3>,
-                                                        Block<"bg", 3>, Block<"ba", 3>>>);
+static_assert(std::is_same_v<Concat<Nav, Bias>, Layout<StateBlock<"p", 3>, StateBlock<"v", 3>, StateBlock<"theta", 3>,
+                                                        StateBlock<"bg", 3>, StateBlock<"ba", 3>>>);
 
 TEST(Layout, ViewsReadAndWriteTheNamedBlock) {
   Full::StateVector x = Full::StateVector::LinSpaced(15, 0.0, 14.0);

@@ -18,7 +18,7 @@
 
 namespace {
 using namespace ctxfuse;
-using L = Layout<Block<"p", 2>, Block<"v", 2>>;
+using L = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>>;
 using Cv = models::ConstantVelocity<L, 2>;
 using PositionFix = models::BlockObservation<L, "p">;
 

@@ -13,7 +13,7 @@
 namespace {
 using namespace ctxfuse;
 using test::autodiff_cost;
-using PV3 = Layout<Block<"p", 3>, Block<"v", 3>>;
+using PV3 = Layout<StateBlock<"p", 3>, StateBlock<"v", 3>>;
 
 Vector<6> state(int k) {
   Vector<6> x;
@@ -95,7 +95,7 @@ TEST(CeresEquality, AutoDiffJacobiansEqualAnalyticOnes) {
     ASSERT_TRUE(make_motion_factor(lp, Vector<2>(0.3, -0.2), 0.1, state(k), lpf));
     EXPECT_LT(binary_gap(lpf, state(k), state(k + 1)), 1e-9) << "linear process " << k;
 
-    using PVB = Layout<Block<"p", 2>, Block<"v", 2>, Block<"b", 3>>;
+    using PVB = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>, StateBlock<"b", 3>>;
     models::AveragedRangeWithBias<PVB> avg;
     avg.anchor = {2.5, -0.87, 1.97};
     avg.tag_height = 1.0;

@@ -14,8 +14,8 @@ namespace {
 using namespace ctxfuse;
 using test::central_jacobian;
 
-using PV3 = Layout<Block<"p", 3>, Block<"v", 3>>;
-using PV2 = Layout<Block<"p", 2>, Block<"v", 2>>;
+using PV3 = Layout<StateBlock<"p", 3>, StateBlock<"v", 3>>;
+using PV2 = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>>;
 
 Vector<6> state(int k) {
   Vector<6> x;

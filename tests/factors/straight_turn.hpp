@@ -15,7 +15,7 @@
 
 namespace ctxfuse::test {
 
-using PV2 = Layout<Block<"p", 2>, Block<"v", 2>>;
+using PV2 = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>>;
 using Range2 = models::RangeToPoint<PV2, 2>;
 using Cv2 = models::ConstantVelocity<PV2, 2>;
 

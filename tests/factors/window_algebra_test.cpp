@@ -20,7 +20,7 @@
 
 namespace {
 using namespace ctxfuse;
-using PV3 = Layout<Block<"p", 3>, Block<"v", 3>>;
+using PV3 = Layout<StateBlock<"p", 3>, StateBlock<"v", 3>>;
 using Range = models::RangeToPoint<PV3, 3>;
 using Cv = models::ConstantVelocity<PV3, 3>;
 constexpr int N = 6;
@@ -295,7 +295,7 @@ TEST(WindowAlgebra, EkfUpdateEqualsOneGaussNewtonStep) {
 // The same for the averaged, biased range of the self-calibrating UWB EKF (7 states: p, v and
 // three anchor biases), whose row touches position, velocity and one bias.
 TEST(WindowAlgebra, EkfUpdateEqualsOneGaussNewtonStepForTheAveragedBiasedRange) {
-  using PVB = Layout<Block<"p", 2>, Block<"v", 2>, Block<"b", 3>>;
+  using PVB = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>, StateBlock<"b", 3>>;
   models::AveragedRangeWithBias<PVB> avg;
   avg.anchor = {2.5775, 0.87, 1.97};
   avg.tag_height = 1.0;

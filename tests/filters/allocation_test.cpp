@@ -54,7 +54,7 @@ TEST(Allocation, EskfPredictAndGatedUpdateNeverAllocate) {
 }
 
 TEST(Allocation, EkfNeverAllocates) {
-  using L = Layout<Block<"p", 3>, Block<"v", 3>>;
+  using L = Layout<StateBlock<"p", 3>, StateBlock<"v", 3>>;
   models::ConstantVelocity<L, 3> cv;
   models::RangeToPoint<L, 3> range;
   range.anchor = {5, 5, 2};

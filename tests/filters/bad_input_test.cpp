@@ -18,7 +18,7 @@ using namespace ctxfuse;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-using L = Layout<Block<"p", 2>, Block<"v", 2>>;
+using L = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>>;
 using Cv = models::ConstantVelocity<L, 2>;
 
 // Bit-for-bit equality of the values (so that -0.0 vs 0.0 or a changed NaN payload counts).
@@ -223,7 +223,7 @@ TEST_F(EskfFixture, RefusesANonFiniteCovariancePredictionAndLeavesStateUnchanged
 
 // The same for the augmented strapdown (its F and Q are built in place around the base's).
 struct AugmentedEskfFixture : ::testing::Test {
-  using Nav20 = models::Augmented<models::InsNavModel<models::FullStrapdown>, Block<"mount", 2>, Block<"lever", 3>>;
+  using Nav20 = models::Augmented<models::InsNavModel<models::FullStrapdown>, StateBlock<"mount", 2>, StateBlock<"lever", 3>>;
   Nav20 model;
   eskf::Belief<Nav20> belief;
   models::BodyIncrements u;

@@ -56,7 +56,7 @@ TEST(LinearKf, OneStepMatchesHandComputation) {
 TEST(LinearKf, LongSequenceMatchesTextbookEquationsInDynamicEigen) {
   // Constant velocity in 2-D with a position measurement, against the textbook filter written
   // plainly with MatrixXd, short-form covariance and an explicit inverse.
-  using L = Layout<Block<"p", 2>, Block<"v", 2>>;
+  using L = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>>;
   models::ConstantVelocity<L, 2> cv{0.5};
   models::BlockObservation<L, "p"> pos;
   pos.R << 0.4, 0.1, 0.1, 0.3;
@@ -98,7 +98,7 @@ TEST(LinearKf, LongSequenceMatchesTextbookEquationsInDynamicEigen) {
 }
 
 TEST(Ekf, GateRejectsAFarOutlierAndReportsTheStatistic) {
-  using L = Layout<Block<"p", 2>, Block<"v", 2>>;
+  using L = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>>;
   models::BlockObservation<L, "p"> pos;
   pos.R = SquareMatrix<2>::Identity();
   Gaussian<4> b{Vector<4>::Zero(), SquareMatrix<4>::Identity()};
@@ -116,7 +116,7 @@ TEST(Ekf, GateRejectsAFarOutlierAndReportsTheStatistic) {
 }
 
 TEST(Ekf, NonlinearRangeUpdateMatchesTextbookEkf) {
-  using L = Layout<Block<"p", 2>, Block<"v", 2>>;
+  using L = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>>;
   models::RangeToPoint<L, 2> range;
   range.anchor = Vector<2>(10.0, 5.0);
   range.sigma = 0.2;
@@ -136,8 +136,8 @@ TEST(Ekf, NonlinearRangeUpdateMatchesTextbookEkf) {
 }
 
 TEST(Ekf, LayoutAdapterAppliesASmallModelToALargerState) {
-  using Small = Layout<Block<"p", 2>>;
-  using Big = Layout<Block<"v", 2>, Block<"psi", 1>, Block<"p", 2>>;
+  using Small = Layout<StateBlock<"p", 2>>;
+  using Big = Layout<StateBlock<"v", 2>, StateBlock<"psi", 1>, StateBlock<"p", 2>>;
   models::RangeToPoint<Small, 2> r_small;
   r_small.anchor = Vector<2>(3.0, 4.0);
   models::RangeToPoint<Big, 2> r_big;

@@ -79,7 +79,7 @@ TEST(Eskf, UpdateInjectsTheKalmanCorrectionAndResetsTheCovariance) {
 
 // A vector-space nominal state: the ESKF must then be exactly the EKF.
 struct VectorCv {
-  using L = Layout<Block<"p", 2>, Block<"v", 2>>;
+  using L = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>>;
   using State = Vector<4>;
   using Input = NoInput;
   static constexpr int dim = 4;

@@ -68,7 +68,7 @@ TEST(BlockState, ResetJacobianOfTheAugmentedInsIsTheDerivativeOfTheReparametrisa
 }
 
 TEST(BlockState, PlanarAngleWrapsAcrossPi) {
-  using S = BlockState<Layout<Block<"psi", 1>, Block<"x", 2>>, PlanarAngleRetraction, VectorRetraction<2>>;
+  using S = BlockState<Layout<StateBlock<"psi", 1>, StateBlock<"x", 2>>, PlanarAngleRetraction, VectorRetraction<2>>;
   S a, b;
   a.get<"psi">()(0) = 179.0 * test::kDeg;
   b.get<"psi">()(0) = -179.0 * test::kDeg;

@@ -10,7 +10,7 @@
 
 #include "ctxfuse/eval/gins_outages.hpp"
 #include "drive_sim.hpp"
-#include "gins_nav20.hpp"
+#include "ctxfuse/instances/gins_nav20.hpp"
 
 namespace {
 using namespace ctxfuse;

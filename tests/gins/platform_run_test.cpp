@@ -11,7 +11,7 @@
 
 #include "ctxfuse/eval/gins_outages.hpp"
 #include "ctxfuse/sim/platform_run.hpp"
-#include "support/gins_nav20.hpp"
+#include "ctxfuse/instances/gins_nav20.hpp"
 
 namespace {
 using namespace ctxfuse;

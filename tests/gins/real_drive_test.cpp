@@ -6,7 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "ctxfuse/eval/gins_outages.hpp"
-#include "gins_nav20.hpp"
+#include "ctxfuse/instances/gins_nav20.hpp"
 #include "support/data_dir.hpp"
 
 namespace {

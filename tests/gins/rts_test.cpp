@@ -286,7 +286,7 @@ TEST(Rts, RefusesAnEpochThatDoesNotAdvanceAndKeepsTheRecords) {
 }
 
 TEST(Rts, BlockSparseTransitionEqualsTheDenseProduct) {
-  using Nav20 = models::Augmented<models::InsNavModel<models::FullStrapdown>, Block<"mount", 2>, Block<"lever", 3>>;
+  using Nav20 = models::Augmented<models::InsNavModel<models::FullStrapdown>, StateBlock<"mount", 2>, StateBlock<"lever", 3>>;
   using L = Nav20::ErrorLayout;
   constexpr auto pat = Nav20::transition_blocks;
   static_assert(decltype(pat)::layout::size == 20);

@@ -7,8 +7,8 @@
 namespace ctxfuse::test {
 
 using Nav15 = models::InsNavModel<models::SimplifiedStrapdown>;
-using Nav20 = models::Augmented<Nav15, Block<"mount", 2>, Block<"lever", 3>>;
-using Nav16 = models::Augmented<Nav15, Block<"speed_scale", 1>>;  // with an odometer's scale error
+using Nav20 = models::Augmented<Nav15, StateBlock<"mount", 2>, StateBlock<"lever", 3>>;
+using Nav16 = models::Augmented<Nav15, StateBlock<"speed_scale", 1>>;  // with an odometer's scale error
 
 inline constexpr double kDeg = 3.14159265358979323846 / 180.0;
 

@@ -28,7 +28,7 @@ struct CopiedNav : Nav<Mechanisation> {
 };
 
 template <class Base>
-using Aug = models::Augmented<Base, Block<"mount", 2>, Block<"lever", 3>>;
+using Aug = models::Augmented<Base, StateBlock<"mount", 2>, StateBlock<"lever", 3>>;
 
 template <class Derived>
 bool same_bytes(const Eigen::DenseBase<Derived>& a, const Eigen::DenseBase<Derived>& b) {

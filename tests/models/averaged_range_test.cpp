@@ -13,7 +13,7 @@ namespace {
 using namespace ctxfuse;
 using test::central_jacobian;
 
-using L = Layout<Block<"p", 2>, Block<"v", 2>, Block<"b", 3>>;
+using L = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>, StateBlock<"b", 3>>;
 
 Vector<7> state() {
   Vector<7> x;

@@ -10,7 +10,7 @@ namespace {
 using namespace ctxfuse;
 using test::central_jacobian;
 
-using L = Layout<Block<"p", 3>, Block<"v", 3>, Block<"c", 1>>;
+using L = Layout<StateBlock<"p", 3>, StateBlock<"v", 3>, StateBlock<"c", 1>>;
 
 TEST(Jacobians, ConstantVelocity) {
   models::ConstantVelocity<L, 3> cv;

@@ -15,6 +15,7 @@
 #include <string>
 #include <utility>
 
+#include "ctxfuse/instances/region_imm.hpp"  // run() compiled once (ctxfuse::instances)
 #include "ctxfuse/eval/region_errors.hpp"
 #include "ctxfuse/pipelines/region_imm.hpp"
 #include "ctxfuse/sim/scenarios.hpp"

@@ -65,7 +65,7 @@ TEST(SourceHealth, RecoveredStartsANewCount) {
   EXPECT_TRUE(h.lockout(2.81));
 }
 
-using L = Layout<Block<"p", 2>, Block<"v", 2>>;
+using L = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>>;
 
 TEST(WidenBlock, AddsSigmaSquaredToTheBlockDiagonalOnly) {
   SquareMatrix<4> P;

@@ -27,7 +27,7 @@
 
 namespace {
 using namespace ctxfuse;
-using L = Layout<Block<"p", 2>, Block<"v", 2>>;
+using L = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>>;
 using Cv = models::ConstantVelocity<L, 2>;
 using Range = models::RangeToPoint<L, 2>;
 constexpr int K = 5, anchors = 3;

@@ -36,7 +36,7 @@
 namespace {
 using namespace ctxfuse;
 namespace hana = boost::hana;
-using L = Layout<Block<"p", 2>, Block<"v", 2>>;
+using L = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>>;
 using Cv = models::ConstantVelocity<L, 2>;
 using PositionFix = models::BlockObservation<L, "p">;
 struct FixTag {};

@@ -23,8 +23,8 @@ inline const io::StreamReport& report_of(const io::ReplayReport<4>& r, StreamId 
 
 /// Every belief the estimator holds: the IMM's modes and combined estimate, the federated
 /// filter's locals and global estimate, GNSS alone's held position.
-template <class Mixing, class Observer>
-void check_estimator(const pipelines::region_imm::Aided<pipelines::region_imm::ImmCore<Mixing>, Observer>& est,
+template <class Mixing>
+void check_estimator(const pipelines::region_imm::Aided<pipelines::region_imm::ImmCore<Mixing>>& est,
                      BeliefChecks& c) {
   const auto& f = *est.core().f;
   c.check(f.template mode_belief<0>());
@@ -32,8 +32,7 @@ void check_estimator(const pipelines::region_imm::Aided<pipelines::region_imm::I
   c.check(f.template mode_belief<2>());
   c.check(f.combined());
 }
-template <class Observer>
-void check_estimator(const pipelines::region_imm::Aided<pipelines::region_imm::FederatedCore, Observer>& est,
+inline void check_estimator(const pipelines::region_imm::Aided<pipelines::region_imm::FederatedCore>& est,
                      BeliefChecks& c) {
   const auto& f = *est.core().f;
   c.check(f.local(0));

@@ -27,7 +27,7 @@
 #include "ctxfuse/pipelines/gins/run.hpp"
 #include "fault_stream.hpp"
 #include "gins/drive_sim.hpp"
-#include "gins_nav20.hpp"
+#include "ctxfuse/instances/gins_nav20.hpp"
 
 namespace {
 using namespace ctxfuse;
@@ -114,7 +114,7 @@ bool finite(const State& x) {
       x.values);
 }
 
-using Pass = test::GinsNav20Pass;  // gins::ForwardPass<gins::Nav20>, compiled once (support/gins_nav20.cpp)
+using Pass = instances::GinsNav20Pass;  // gins::ForwardPass<gins::Nav20>, compiled once (src/gins_nav20.cpp)
 
 /// The pass as the replay's handler, its belief checked after every step it takes once aligned.
 struct CheckedPass {

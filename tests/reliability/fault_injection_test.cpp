@@ -125,13 +125,13 @@ Outcome run(Pipeline p, const Fault* f, const ri::Settings& s = defaults()) {
   switch (p) {
     case Pipeline::region_imm: {
       using M = policies::RegionAdaptiveTransition<3>;
-      ri::Aided<ri::ImmCore<M>, CountGated> est(ri::ImmCore<M>{&s, ri::detail::make_mixing<M>(s), &regions()}, s,
+      ri::Aided<ri::ImmCore<M>> est(ri::ImmCore<M>{&s, ri::detail::make_mixing<M>(s), &regions()}, s,
                                                 &out.gated);
       replay_into(est, f, s, out);
       break;
     }
     case Pipeline::fkf: {
-      ri::Aided<ri::FederatedCore, CountGated> est(ri::FederatedCore{&s}, s, &out.gated);
+      ri::Aided<ri::FederatedCore> est(ri::FederatedCore{&s}, s, &out.gated);
       replay_into(est, f, s, out);
       break;
     }

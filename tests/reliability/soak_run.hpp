@@ -144,7 +144,7 @@ inline Report run(const Config& c, const std::function<void(const Report&, std::
   const rimm::Settings s;
   PlanarTruth planar(s);
   GateCounter counter;
-  rimm::Aided<rimm::ImmCore<ImmMixing>, GateCounter> imm(
+  rimm::Aided<rimm::ImmCore<ImmMixing>> imm(
       rimm::ImmCore<ImmMixing>{&s, rimm::detail::make_mixing<ImmMixing>(s), nullptr}, s, &counter);
   {
     Gaussian<8> b0;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "cli/formatted.hpp"
+#include "ctxfuse/instances/region_imm.hpp"  // run() compiled once (ctxfuse::instances)
 #include "ctxfuse/eval/region_errors.hpp"
 #include "ctxfuse/eval/region_training.hpp"
 

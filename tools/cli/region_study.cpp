@@ -27,6 +27,7 @@
 #include "cli/region_study_zones.hpp"
 #include "cli/scenario_flag.hpp"
 #include "cli/seed_list.hpp"
+#include "ctxfuse/instances/region_imm.hpp"  // run() compiled once (ctxfuse::instances)
 #include "ctxfuse/eval/region_errors.hpp"
 #include "ctxfuse/eval/region_training.hpp"
 #include "ctxfuse/pipelines/region_imm.hpp"

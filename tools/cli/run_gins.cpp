@@ -25,7 +25,7 @@
 #include "cli/run_gins_plots.hpp"
 #include "cli/run_registry.hpp"
 #include "ctxfuse/eval/gins_outages.hpp"
-#include "gins_nav20.hpp"
+#include "ctxfuse/instances/gins_nav20.hpp"
 
 namespace ctxfuse::cli {
 namespace {

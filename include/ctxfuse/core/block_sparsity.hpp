@@ -13,7 +13,6 @@
 
 #include <array>
 #include <cstddef>
-#include <stdexcept>
 #include <string_view>
 #include <utility>
 
@@ -53,30 +52,37 @@ struct ColumnPattern {
   std::array<int, K> block{};
 };
 
-/// Non-zero blocks of a square Jacobian over layout L. A name that is not in L is a
-/// compile-time error (the throw cannot be evaluated in a constant expression).
+namespace detail {
+// Not constexpr: a pattern whose evaluation reaches one fails to compile, naming it.
+inline void block_name_not_in_layout() {}
+inline void identity_or_diagonal_block_not_square() {}
+}  // namespace detail
+
+/// Non-zero blocks of a square Jacobian over layout L, evaluated at compile time only: a name
+/// that is not in L, or an identity or diagonal block that is not square, does not compile.
 template <class L, std::size_t K>
-constexpr BlockPattern<L, K> block_pattern(const NamedBlock (&blocks)[K]) {
+consteval BlockPattern<L, K> block_pattern(const NamedBlock (&blocks)[K]) {
   BlockPattern<L, K> p;
   for (std::size_t k = 0; k < K; ++k) {
     p.row[k] = L::index_of(blocks[k].row);
     p.col[k] = L::index_of(blocks[k].col);
-    if (p.row[k] < 0 || p.col[k] < 0) throw std::logic_error("block name not in layout");
+    if (p.row[k] < 0 || p.col[k] < 0) detail::block_name_not_in_layout();
     p.kind[k] = blocks[k].kind;
     if (blocks[k].kind != BlockKind::dense &&
         L::sizes[static_cast<std::size_t>(p.row[k])] != L::sizes[static_cast<std::size_t>(p.col[k])])
-      throw std::logic_error("an identity or diagonal block must be square");
+      detail::identity_or_diagonal_block_not_square();
   }
   return p;
 }
 
-/// Blocks of the state that a measurement Jacobian (rows = measurement) may touch.
+/// Blocks of the state that a measurement Jacobian (rows = measurement) may touch; compile time
+/// only, a name not in L does not compile.
 template <class L, std::size_t K>
-constexpr ColumnPattern<L, K> column_pattern(const std::string_view (&names)[K]) {
+consteval ColumnPattern<L, K> column_pattern(const std::string_view (&names)[K]) {
   ColumnPattern<L, K> p;
   for (std::size_t k = 0; k < K; ++k) {
     p.block[k] = L::index_of(names[k]);
-    if (p.block[k] < 0) throw std::logic_error("block name not in layout");
+    if (p.block[k] < 0) detail::block_name_not_in_layout();
   }
   return p;
 }

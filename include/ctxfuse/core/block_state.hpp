@@ -5,7 +5,7 @@
 // state (an augmentation: lever arm, mounting angles, scale factors) is adding a block and a
 // retraction, not rewriting the model's retraction.
 //
-//   using S = BlockState<Layout<Block<"p", 3>, Block<"theta", 3>>, VectorRetraction<3>, So3Retraction>;
+//   using S = BlockState<Layout<StateBlock<"p", 3>, StateBlock<"theta", 3>>, VectorRetraction<3>, So3Retraction>;
 //   S x;  x.get<"theta">() = Eigen::Quaterniond::Identity();
 //   S y = block_inject(x, dx);  Vector<6> d = block_difference(y, x);   // == dx
 #pragma once

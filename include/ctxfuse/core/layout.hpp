@@ -13,7 +13,7 @@
 
 namespace ctxfuse {
 
-/// A string usable as a template argument: Block<"p", 3>.
+/// A string usable as a template argument: StateBlock<"p", 3>.
 template <std::size_t N>
 struct FixedString {
   char chars[N]{};
@@ -22,7 +22,7 @@ struct FixedString {
 };
 
 template <FixedString Name, int Size>
-struct Block {
+struct StateBlock {
   static_assert(Size > 0, "a state block has at least one element");
   static constexpr std::string_view name = Name.view();
   static constexpr int size = Size;

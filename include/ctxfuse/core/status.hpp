@@ -12,7 +12,7 @@
 namespace ctxfuse {
 
 enum class Outcome : std::uint8_t {
-  accepted,           // the estimate was changed
+  accepted,           // the estimate was changed (from score(): an update would change it)
   gated,              // measurement valid but rejected by the gate; statistic/threshold tell why
   invalid_input,      // a caller-supplied value is unusable; `problem` names it
   numerical_failure,  // the numbers went bad inside the step; `problem` names where
@@ -56,10 +56,16 @@ enum class Problem : std::uint8_t {
   system_not_positive_definite,  // the window's normal equations (or the block being
                                  // marginalised) are not positive definite
   measurement_count_above_capacity,  // more measurements in an epoch than its fixed slots
+  // Run-time sized arguments (an Eigen::VectorXd, a Map, a dynamic block) at a fixed-size
+  // entry point: refused before a single element is read (core/validation.hpp).
+  measurement_wrong_size,  // z's rows x cols is not the measurement model's dim x 1
+  input_wrong_size,        // u's rows x cols is not the process model's Input
+  // Construction (core/error.hpp): a check function's verdict on a setting.
+  invalid_setting,  // a setting outside its range (shares, weights, probabilities, counts)
 };
 
 /// The last Problem, for code that walks them all (keep it the last enumerator above).
-inline constexpr Problem last_problem = Problem::measurement_count_above_capacity;
+inline constexpr Problem last_problem = Problem::invalid_setting;
 
 constexpr std::string_view describe(Problem p) {
   switch (p) {
@@ -90,6 +96,9 @@ constexpr std::string_view describe(Problem p) {
     case Problem::local_filter_index_out_of_range: return "local filter index out of range";
     case Problem::system_not_positive_definite: return "normal equations of the window are not positive definite";
     case Problem::measurement_count_above_capacity: return "more measurements than the epoch's fixed slots";
+    case Problem::measurement_wrong_size: return "measurement vector has the wrong size for the measurement model";
+    case Problem::input_wrong_size: return "process input has the wrong size for the process model";
+    case Problem::invalid_setting: return "a setting is outside its range";
     case Problem::too_few_measurements: return "fewer measurements than unknowns";
     case Problem::degenerate_geometry: return "geometry too poor to solve (nearly singular normal equations)";
     case Problem::not_converged: return "the solution did not converge";

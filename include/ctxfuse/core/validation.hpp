@@ -69,6 +69,46 @@ Problem diagnose_non_finite_prediction(const Eigen::MatrixBase<DerivedQ>& Q, con
   return Problem::non_finite_covariance;
 }
 
+/// Eigen matrix expressions whose size is known only at run time: a VectorXd, a Map or Ref of
+/// one, a segment with run-time extents. The entry points of the filters take fixed-size
+/// vectors, to which such an expression converts silently (reading past its end when it is too
+/// short: Eigen's size assert is compiled out under NDEBUG). So each entry point has an
+/// overload for these that checks the size first and refuses a wrong one with
+/// Problem::measurement_wrong_size or Problem::input_wrong_size, in every build mode.
+namespace detail {
+template <class D>
+void matrix_base_of(const Eigen::MatrixBase<D>*);
+}  // namespace detail
+
+/// Any Eigen matrix expression, including those whose matrix base is another type's (a
+/// VectorBlock derives from MatrixBase<Block<...>>, not MatrixBase<VectorBlock<...>>).
+template <class T>
+concept EigenMatrixExpression = requires(const T* p) { detail::matrix_base_of(p); };
+
+template <class T>
+concept DynamicSizeEigen = EigenMatrixExpression<T> && (T::SizeAtCompileTime == Eigen::Dynamic);
+
+/// A fixed-size Eigen matrix type (the measurement vectors, and the input of most models).
+template <class T>
+concept FixedSizeEigen = EigenMatrixExpression<T> && (T::SizeAtCompileTime != Eigen::Dynamic);
+
+/// out = v when v has Fixed's rows and columns; otherwise `wrong_size`, and out is untouched.
+template <FixedSizeEigen Fixed, DynamicSizeEigen V>
+Problem copy_sized(const V& v, Fixed& out, Problem wrong_size) {
+  if (v.rows() != Fixed::RowsAtCompileTime || v.cols() != Fixed::ColsAtCompileTime) return wrong_size;
+  out = v;
+  return Problem::none;
+}
+
+/// step(fixed) with v copied into a Fixed when its size is Fixed's; otherwise an invalid-input
+/// Status naming `wrong_size`, and step is not called. The entry points' run-time sized overloads.
+template <FixedSizeEigen Fixed, DynamicSizeEigen V, class Step>
+Status with_size_checked(const V& v, Problem wrong_size, Step&& step) {
+  Fixed fixed;
+  if (Problem p = copy_sized(v, fixed, wrong_size); p != Problem::none) return Status::invalid(p);
+  return step(static_cast<const Fixed&>(fixed));
+}
+
 template <int M>
 Problem check_measurement(const Vector<M>& z, const SquareMatrix<M>& R, const FilterOptions& opts) {
   if (!all_finite(z)) return Problem::non_finite_measurement;

@@ -197,7 +197,7 @@ inline GinsSimDrive gins_sim_drive(const sim::Drive& d) {
 }
 
 using GinsSimBaseModel = models::InsNavModel<models::SimplifiedStrapdown>;
-using GinsSimModel = models::Augmented<GinsSimBaseModel, Block<"speed_scale", 1>>;  // a constant
+using GinsSimModel = models::Augmented<GinsSimBaseModel, StateBlock<"speed_scale", 1>>;  // a constant
 
 inline GinsSimModel gins_sim_model(const sim::ImuConfig& c) {
   GinsSimModel m;

@@ -78,6 +78,24 @@ Status update(const Meas& meas, Gaussian<N>& belief, const Vector<Meas::dim>& z,
   return status;
 }
 
+// Arguments whose size is known only at run time (VectorXd, Map, dynamic blocks): the size is
+// checked before anything is read, and a wrong one is refused (core/validation.hpp).
+template <VectorProcessModel Model, DynamicSizeEigen U>
+  requires FixedSizeEigen<typename Model::Input>
+Status predict(const Model& model, Gaussian<Model::dim>& belief, const U& u, double dt, const FilterOptions& opts = {},
+               SquareMatrix<Model::dim>* F_used = nullptr) {
+  using In = typename Model::Input;
+  return with_size_checked<In>(u, Problem::input_wrong_size,
+                               [&](const In& f) { return predict(model, belief, f, dt, opts, F_used); });
+}
+template <int N, class Meas, DynamicSizeEigen Z, class Gate = NoGate>
+  requires MeasurementModel<Meas, Vector<N>, N> && GatePolicy<Gate>
+Status update(const Meas& meas, Gaussian<N>& belief, const Z& z, const Gate& gate = {}, const FilterOptions& opts = {}) {
+  return with_size_checked<Vector<Meas::dim>>(z, Problem::measurement_wrong_size, [&](const Vector<Meas::dim>& f) {
+    return update<N>(meas, belief, f, gate, opts);
+  });
+}
+
 }  // namespace ctxfuse::ekf
 
 namespace ctxfuse {

@@ -136,6 +136,25 @@ Status update(const Model& model, const Meas& meas, Belief<Model>& belief, const
   return status;
 }
 
+// Arguments whose size is known only at run time (VectorXd, Map, dynamic blocks): the size is
+// checked before anything is read, and a wrong one is refused (core/validation.hpp).
+template <ErrorStateProcessModel Model, DynamicSizeEigen U>
+  requires FixedSizeEigen<typename Model::Input>
+Status predict(const Model& model, Belief<Model>& belief, const U& u, double dt, const FilterOptions& opts = {},
+               SquareMatrix<Model::dim>* F_used = nullptr) {
+  using In = typename Model::Input;
+  return with_size_checked<In>(u, Problem::input_wrong_size,
+                               [&](const In& f) { return predict(model, belief, f, dt, opts, F_used); });
+}
+template <ErrorStateProcessModel Model, class Meas, DynamicSizeEigen Z, class Gate = NoGate>
+  requires MeasurementModel<Meas, typename Model::State, Model::dim> && GatePolicy<Gate>
+Status update(const Model& model, const Meas& meas, Belief<Model>& belief, const Z& z, const Gate& gate = {},
+              const FilterOptions& opts = {}, Vector<Model::dim>* dx_applied = nullptr) {
+  return with_size_checked<Vector<Meas::dim>>(z, Problem::measurement_wrong_size, [&](const Vector<Meas::dim>& f) {
+    return update(model, meas, belief, f, gate, opts, dx_applied);
+  });
+}
+
 }  // namespace ctxfuse::eskf
 
 namespace ctxfuse {

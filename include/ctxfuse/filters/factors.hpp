@@ -50,6 +50,15 @@ Status make_measurement_factor(const Meas& meas, const Vector<Meas::dim>& z, con
   out = f;
   return Status{};
 }
+/// z of a size known only at run time: refused with measurement_wrong_size unless Meas::dim x 1.
+template <int N, class Meas, DynamicSizeEigen Z>
+  requires MeasurementModel<Meas, Vector<N>, N>
+Status make_measurement_factor(const Meas& meas, const Z& z, const Vector<N>& x_lin, MeasurementFactor<N, Meas>& out,
+                               const FilterOptions& opts = {}) {
+  return with_size_checked<Vector<Meas::dim>>(z, Problem::measurement_wrong_size, [&](const Vector<Meas::dim>& f) {
+    return make_measurement_factor<N>(meas, f, x_lin, out, opts);
+  });
+}
 
 /// Binary factor of a process model between consecutive states: r = W (x_{k+1} [-] f(x_k, u, dt)),
 /// W from the discrete process noise Q, which must be positive definite (white acceleration
@@ -118,6 +127,15 @@ Status make_motion_factor(const Model& model, const typename Model::Input& u, do
     return Status::invalid(Problem::process_noise_negative_variance);
   out = f;
   return Status{};
+}
+/// u of a size known only at run time: refused with input_wrong_size unless it is Model::Input's.
+template <VectorProcessModel Model, DynamicSizeEigen U>
+  requires FixedSizeEigen<typename Model::Input>
+Status make_motion_factor(const Model& model, const U& u, double dt, const Vector<Model::dim>& x_lin,
+                          MotionFactor<Model>& out, const FilterOptions& opts = {}) {
+  using In = typename Model::Input;
+  return with_size_checked<In>(u, Problem::input_wrong_size,
+                               [&](const In& f) { return make_motion_factor(model, f, dt, x_lin, out, opts); });
 }
 
 }  // namespace ctxfuse

@@ -22,10 +22,10 @@
 
 #include <array>
 #include <cmath>
-#include <stdexcept>
 #include <string>
 
 #include "ctxfuse/core/concepts.hpp"
+#include "ctxfuse/core/error.hpp"
 #include "ctxfuse/core/gaussian.hpp"
 #include "ctxfuse/core/retraction.hpp"
 #include "ctxfuse/filters/ekf.hpp"
@@ -88,16 +88,25 @@ class FederatedFilter {
   using Input = typename Model::Input;
   using Belief = Gaussian<N>;
 
+  /// What the constructor would refuse (invalid_setting): a share not > 0, or shares whose sum
+  /// is not 1 (within 1e-9).
+  static Problem check_shares(const std::array<double, L>& beta) {
+    double s = 0.0;
+    for (double b : beta) {
+      if (!(b > 0.0)) return Problem::invalid_setting;
+      s += b;
+    }
+    return std::abs(s - 1.0) <= 1e-9 ? Problem::none : Problem::invalid_setting;
+  }
+
   FederatedFilter(Model model, const Belief& initial, const std::array<double, L>& beta, FilterOptions options = {},
                   Gate gate = {})
       : model_(std::move(model)), beta_(beta), options_(options), gate_(std::move(gate)) {
-    double s = 0.0;
-    for (int i = 0; i < L; ++i) {
-      if (!(beta[static_cast<std::size_t>(i)] > 0.0))
-        throw std::invalid_argument("FederatedFilter: beta_" + std::to_string(i) + " must be > 0");
-      s += beta[static_cast<std::size_t>(i)];
+    if (check_shares(beta) != Problem::none) {
+      std::string shares;
+      for (double b : beta) shares += (shares.empty() ? "" : ", ") + std::to_string(b);
+      ctxfuse::detail::invalid_setting("FederatedFilter: the shares beta_i must be > 0 and sum to 1, got " + shares);
     }
-    if (std::abs(s - 1.0) > 1e-9) throw std::invalid_argument("FederatedFilter: the beta_i must sum to 1, got " + std::to_string(s));
     global_ = initial;
     reset_locals();
   }
@@ -124,6 +133,18 @@ class FederatedFilter {
   Status update(int i, const Meas& meas, const Vector<Meas::dim>& z) {
     if (i < 0 || i >= L) return Status::invalid(Problem::local_filter_index_out_of_range);
     return ekf::update<N>(meas, locals_[static_cast<std::size_t>(i)], z, gate_, options_);
+  }
+
+  // Arguments whose size is known only at run time: checked first, a wrong one refused.
+  template <DynamicSizeEigen U>
+    requires FixedSizeEigen<Input>
+  Status predict(const U& u, double dt) {
+    return with_size_checked<Input>(u, Problem::input_wrong_size, [&](const Input& f) { return predict(f, dt); });
+  }
+  template <class Meas, DynamicSizeEigen Z>
+  Status update(int i, const Meas& meas, const Z& z) {
+    return with_size_checked<Vector<Meas::dim>>(z, Problem::measurement_wrong_size,
+                                                [&](const Vector<Meas::dim>& f) { return update(i, meas, f); });
   }
 
   /// Replaces the global estimate and resets the locals from it (P_i = P_g / beta_i), e.g. to

@@ -82,6 +82,10 @@ struct EpochMeasurements {
     attached[k] = attach;
     return true;
   }
+  /// A value whose size is known only at run time would be read past its end when too short:
+  /// convert it with a size check first (core/validation.hpp, copy_sized).
+  template <DynamicSizeEigen Z>
+  bool add(const Meas& model, const Z& value, bool attach = true) = delete;
   int attached_count() const {
     int n = 0;
     for (int i = 0; i < count; ++i) n += attached[static_cast<std::size_t>(i)] ? 1 : 0;
@@ -153,6 +157,12 @@ class FixedLagSmoother {
 
   /// Adds the state at time t, predicted from the newest by the motion model with input u,
   /// marginalising the oldest first when the window is full, and solves the window.
+  /// u of a size known only at run time: refused with input_wrong_size unless it is Input's.
+  template <DynamicSizeEigen U>
+    requires FixedSizeEigen<Input>
+  Status step(double t, const U& u, const Measurements& meas) {
+    return with_size_checked<Input>(u, Problem::input_wrong_size, [&](const Input& f) { return step(t, f, meas); });
+  }
   Status step(double t, const Input& u, const Measurements& meas) {
     if (!initialised()) return Status::invalid(Problem::time_not_set);
     if (!std::isfinite(t)) return Status::invalid(Problem::non_finite_dt);

@@ -15,6 +15,7 @@
 #include "ctxfuse/core/types.hpp"
 #include "ctxfuse/core/validation.hpp"
 #include "ctxfuse/filters/kalman_update.hpp"
+#include "ctxfuse/filters/score.hpp"
 #include "ctxfuse/policies/gating.hpp"
 
 namespace ctxfuse::imm {
@@ -79,26 +80,13 @@ constexpr bool is_hana_tuple() {
 }
 
 /// Innovation log-likelihood of a mode's prediction on a measurement it does not take, without
-/// correcting it: outcome `gated` (scored, not applied), NIS and log N(y; 0, S) filled in.
+/// correcting it: outcome `gated` (scored, not applied), NIS and log N(y; 0, S) filled in, as
+/// ctxfuse::score computes them.
 template <int N, class Meas, class B, int M>
 Status score_prediction(const Meas& meas, const B& belief, const Vector<M>& z, const FilterOptions& options) {
-  const SquareMatrix<M> Rm = meas.noise(point(belief));
-  if (Problem p = check_measurement<M>(z, Rm, options); p != Problem::none) return Status::invalid(p);
-  if (Problem p = ctxfuse::detail::model_check(meas, z); p != Problem::none) return Status::invalid(p);
-  Matrix<M, N> H;
-  const Vector<M> zp = meas.predict(point(belief), &H);
-  const Vector<M> y = ctxfuse::detail::innovation(meas, z, zp);
-  if (!H.allFinite() || !y.allFinite()) return Status::failure(Problem::non_finite_prediction);
-  SquareMatrix<M> S = H * belief.cov * H.transpose();
-  S += Rm;
-  symmetrize(S);
-  const InnovationSolve<M> solve(S);
-  if (!solve.ok) return Status::failure(Problem::innovation_not_positive_definite);
-  Status s;
-  s.outcome = Outcome::gated;
-  s.dof = M;
-  s.nis = solve.nis(y);
-  s.log_likelihood = solve.log_likelihood(s.nis);
+  static_assert(std::remove_cvref_t<decltype(belief.cov)>::RowsAtCompileTime == N);
+  Status s = ctxfuse::score(meas, belief, z, NoGate{}, options);
+  if (s.accepted()) s.outcome = Outcome::gated;
   return s;
 }
 

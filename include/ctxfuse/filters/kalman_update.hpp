@@ -105,6 +105,38 @@ SquareMatrix<N> reset_covariance(const SquareMatrix<N>& G, const SquareMatrix<N>
   return out;
 }
 
+/// P H' and the innovation covariance S = H P H' + R (symmetrised). `Meas` only matters for its
+/// optional `jacobian_columns`: the blocks of the state its Jacobian can touch, so that the
+/// products skip the columns that are zero. The update and score() (filters/score.hpp) both
+/// compute S here, so a score's NIS is the update's to the last bit.
+template <class Meas, int N, int M>
+void innovation_covariance(const SquareMatrix<N>& P, const Matrix<M, N>& H, const SquareMatrix<M>& R,
+                           Matrix<N, M>& PHt, SquareMatrix<M>& S) {
+  if constexpr (requires { Meas::jacobian_columns; }) {
+    static_assert(decltype(Meas::jacobian_columns)::layout::size == N, "jacobian_columns over another layout");
+    PHt = times_transpose_columns<Meas::jacobian_columns>(P, H);
+    S = columns_times<Meas::jacobian_columns>(H, PHt);
+  } else {
+    PHt.noalias() = P.lazyProduct(H.transpose());
+    S.noalias() = H.lazyProduct(PHt);
+  }
+  S += R;
+  symmetrize(S);
+}
+
+/// The innovation's statistics (dof, NIS, log N(y; 0, S)) and the gate's verdict: outcome
+/// `gated` when the gate refuses, else accepted. The update and score() share it.
+template <int M, class Gate>
+Status innovation_verdict(const InnovationSolve<M>& solve, const Vector<M>& y, const Gate& gate) {
+  Status status;
+  status.dof = M;
+  status.nis = solve.nis(y);
+  status.log_likelihood = solve.log_likelihood(status.nis);
+  status.gate_threshold = gate.threshold(M);
+  if (!(status.nis <= status.gate_threshold)) status.outcome = Outcome::gated;
+  return status;
+}
+
 /// `Meas` only matters for its optional `jacobian_columns`: the blocks of the state its
 /// Jacobian can touch, so that P H' and H P H' skip the columns that are zero.
 /// On acceptance P_post holds the posterior covariance in its LOWER triangle only (its strict
@@ -117,28 +149,12 @@ Status kalman_correction(const SquareMatrix<N>& P, const Matrix<M, N>& H, const 
 
   Matrix<N, M> PHt;
   SquareMatrix<M> S;
-  if constexpr (requires { Meas::jacobian_columns; }) {
-    static_assert(decltype(Meas::jacobian_columns)::layout::size == N, "jacobian_columns over another layout");
-    PHt = times_transpose_columns<Meas::jacobian_columns>(P, H);
-    S = columns_times<Meas::jacobian_columns>(H, PHt);
-  } else {
-    PHt.noalias() = P.lazyProduct(H.transpose());
-    S.noalias() = H.lazyProduct(PHt);
-  }
-  S += R;
-  symmetrize(S);
+  innovation_covariance<Meas, N, M>(P, H, R, PHt, S);
   const InnovationSolve<M> solve(S);
   if (!solve.ok) return Status::failure(Problem::innovation_not_positive_definite);
 
-  Status status;
-  status.dof = M;
-  status.nis = solve.nis(y);
-  status.log_likelihood = solve.log_likelihood(status.nis);
-  status.gate_threshold = gate.threshold(M);
-  if (!(status.nis <= status.gate_threshold)) {
-    status.outcome = Outcome::gated;
-    return status;
-  }
+  Status status = innovation_verdict<M>(solve, y, gate);
+  if (!status.accepted()) return status;
 
   // K = P H' S^-1 by triangular solves with the Cholesky factor of S: no explicit inverse.
   const Matrix<N, M> K = solve.right_solve(PHt);

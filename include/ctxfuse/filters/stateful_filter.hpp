@@ -9,6 +9,7 @@
 #include "ctxfuse/core/types.hpp"
 #include "ctxfuse/core/validation.hpp"
 #include "ctxfuse/filters/filter_clock.hpp"
+#include "ctxfuse/filters/score.hpp"
 
 namespace ctxfuse::detail {
 
@@ -44,6 +45,35 @@ class StatefulFilter {
   template <class Meas>
   Status update(const Meas& meas, const Vector<Meas::dim>& z) {
     return Steps::update(model_, meas, belief_, z, gate_, options_);
+  }
+
+  /// What update(meas, z) would report (NIS, log-likelihood, the gate's verdict), without
+  /// updating (filters/score.hpp).
+  template <class Meas>
+  Status score(const Meas& meas, const Vector<Meas::dim>& z) const {
+    return ctxfuse::score(meas, belief_, z, gate_, options_);
+  }
+
+  // Arguments whose size is known only at run time (VectorXd, Map, dynamic blocks): the size
+  // is checked before anything is read, and a wrong one is refused (core/validation.hpp).
+  template <DynamicSizeEigen U>
+    requires FixedSizeEigen<Input>
+  Status predict(const U& u, double dt) {
+    return with_size_checked<Input>(u, Problem::input_wrong_size, [&](const Input& f) { return predict(f, dt); });
+  }
+  template <DynamicSizeEigen U>
+    requires FixedSizeEigen<Input>
+  Status predict_to(double t, const U& u) {
+    return with_size_checked<Input>(u, Problem::input_wrong_size, [&](const Input& f) { return predict_to(t, f); });
+  }
+  template <class Meas, DynamicSizeEigen Z>
+  Status update(const Meas& meas, const Z& z) {
+    return with_size_checked<Vector<Meas::dim>>(z, Problem::measurement_wrong_size,
+                                                [&](const Vector<Meas::dim>& f) { return update(meas, f); });
+  }
+  template <class Meas, DynamicSizeEigen Z>
+  Status score(const Meas& meas, const Z& z) const {
+    return ctxfuse::score(meas, belief_, z, gate_, options_);
   }
 
  private:

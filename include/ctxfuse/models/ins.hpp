@@ -38,7 +38,7 @@ struct InsState {
   Eigen::Vector3d ba = Eigen::Vector3d::Zero();
 };
 
-using Ins15Layout = Layout<Block<"p", 3>, Block<"v", 3>, Block<"theta", 3>, Block<"bg", 3>, Block<"ba", 3>>;
+using Ins15Layout = Layout<StateBlock<"p", 3>, StateBlock<"v", 3>, StateBlock<"theta", 3>, StateBlock<"bg", 3>, StateBlock<"ba", 3>>;
 
 /// First-order Gauss-Markov bias: b+ = exp(-dt/tau) b + w, with driving-noise density sigma
 /// [unit/s/sqrt(Hz)... i.e. unit/sqrt(s)]; tau = infinity is a random walk.

@@ -1,7 +1,7 @@
 // Augmentation of an error-state process model with extra blocks, each a constant or a
 // first-order Gauss-Markov process (lever arm, mounting angles, scale factors):
 //
-//   using Ins20 = Augmented<InsNavModel<>, Block<"mount", 2>, Block<"lever", 3>>;
+//   using Ins20 = Augmented<InsNavModel<>, StateBlock<"mount", 2>, StateBlock<"lever", 3>>;
 //
 // The state is the base's BlockState with the extra blocks appended (VectorRetraction each),
 // so inject/difference/reset Jacobian follow from the blocks; the transition and reset block

@@ -12,7 +12,7 @@
 //                        two-sample coning and sculling from consecutive increments.
 //
 // Intended use with io/replay.hpp (a later pipeline builds this; nothing here reads files):
-//   using Ins20 = Augmented<InsNavModel<>, Block<"mount", 2>, Block<"lever", 3>>;  // ins_augment.hpp
+//   using Ins20 = Augmented<InsNavModel<>, StateBlock<"mount", 2>, StateBlock<"lever", 3>>;  // ins_augment.hpp
 //   ImuInput imu{mounting_rotation(r, p, y), delay};   // ins_input.hpp
 //   Before the replay, shift each io::ImuSample's stamp with imu.apply_delay; start the filter
 //   from a DynamicAligner (alignment.hpp) fed with the io::GnssFix positions. Handler:

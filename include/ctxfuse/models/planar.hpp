@@ -25,7 +25,7 @@
 
 namespace ctxfuse::models {
 
-using PlanarLayout = Layout<Block<"p", 2>, Block<"v", 2>, Block<"psi", 1>, Block<"bg", 1>, Block<"ba", 2>>;
+using PlanarLayout = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>, StateBlock<"psi", 1>, StateBlock<"bg", 1>, StateBlock<"ba", 2>>;
 
 /// Wraps an angle to (-pi, pi].
 inline double wrap_angle(double a) {

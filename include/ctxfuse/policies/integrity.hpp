@@ -26,11 +26,12 @@
 
 #include <cmath>
 #include <optional>
-#include <stdexcept>
 
 #include <Eigen/Cholesky>
 
+#include "ctxfuse/core/error.hpp"
 #include "ctxfuse/core/numerics.hpp"
+#include "ctxfuse/core/status.hpp"
 #include "ctxfuse/core/types.hpp"
 
 namespace ctxfuse::policies {
@@ -41,14 +42,26 @@ struct SnapshotIntegrityOptions {
   int consecutive = 3;         // disagreeing snapshots in a row that make a fault
 };
 
-/// Throws std::invalid_argument naming the option that is out of range.
-inline void check_options(const SnapshotIntegrityOptions& o) {
-  if (!(o.probability > 0.0 && o.probability < 1.0))
-    throw std::invalid_argument("SnapshotIntegrity: probability must be in (0, 1)");
+/// The option that is out of range, or nullptr when all are in range.
+inline const char* invalid_option(const SnapshotIntegrityOptions& o) {
+  if (!(o.probability > 0.0 && o.probability < 1.0)) return "SnapshotIntegrity: probability must be in (0, 1)";
   if (!(o.min_error_m >= 0.0) || !std::isfinite(o.min_error_m))
-    throw std::invalid_argument("SnapshotIntegrity: min_error_m must be finite and >= 0");
-  if (o.consecutive < 1) throw std::invalid_argument("SnapshotIntegrity: consecutive must be >= 1");
+    return "SnapshotIntegrity: min_error_m must be finite and >= 0";
+  if (o.consecutive < 1) return "SnapshotIntegrity: consecutive must be >= 1";
+  return nullptr;
 }
+
+/// invalid_setting when an option is out of range (what SnapshotIntegrity's constructor refuses).
+inline Problem check_options(const SnapshotIntegrityOptions& o) {
+  return invalid_option(o) ? Problem::invalid_setting : Problem::none;
+}
+
+namespace detail {
+/// The constructor's check: throws std::invalid_argument naming the option (core/error.hpp).
+inline void require_options(const SnapshotIntegrityOptions& o) {
+  if (const char* what = invalid_option(o)) ctxfuse::detail::invalid_setting(what);
+}
+}  // namespace detail
 
 template <int D>
 class SnapshotIntegrity {
@@ -66,7 +79,7 @@ class SnapshotIntegrity {
 
   SnapshotIntegrity() : SnapshotIntegrity(SnapshotIntegrityOptions{}) {}
   explicit SnapshotIntegrity(SnapshotIntegrityOptions options)
-      : options_(options), threshold_((check_options(options), chi_square_quantile(options.probability, D))) {}
+      : options_(options), threshold_((detail::require_options(options), chi_square_quantile(options.probability, D))) {}
 
   /// Compares the snapshot (position, covariance) taken at time t with the estimate and its
   /// covariance. Returns a fault after `consecutive` disagreements in a row, and starts a new

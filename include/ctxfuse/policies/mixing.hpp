@@ -8,12 +8,32 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <stdexcept>
 #include <string>
 
+#include "ctxfuse/core/error.hpp"
+#include "ctxfuse/core/status.hpp"
 #include "ctxfuse/core/types.hpp"
 
 namespace ctxfuse::policies {
+
+// Each constructor below that can be given a bad setting has a check function beside it that
+// returns a Problem instead of throwing (core/error.hpp): for code built without exceptions, or
+// that must not stop on a configuration error.
+
+/// transition_matrix_not_stochastic unless every entry is finite and >= 0 and every row sums
+/// to 1 (within 1e-9).
+template <int R>
+Problem check_transition(const SquareMatrix<R>& P) {
+  for (int i = 0; i < R; ++i) {
+    double s = 0.0;
+    for (int j = 0; j < R; ++j) {
+      if (!std::isfinite(P(i, j)) || P(i, j) < 0.0) return Problem::transition_matrix_not_stochastic;
+      s += P(i, j);
+    }
+    if (std::abs(s - 1.0) > 1e-9) return Problem::transition_matrix_not_stochastic;
+  }
+  return Problem::none;
+}
 
 namespace detail {
 template <int R>
@@ -22,13 +42,13 @@ void require_row_stochastic(const SquareMatrix<R>& P, const char* who) {
     double s = 0.0;
     for (int j = 0; j < R; ++j) {
       if (!std::isfinite(P(i, j)) || P(i, j) < 0.0)
-        throw std::invalid_argument(std::string(who) + ": entry (" + std::to_string(i) + ", " + std::to_string(j) +
-                                    ") is negative or not finite");
+        ctxfuse::detail::invalid_setting(std::string(who) + ": entry (" + std::to_string(i) + ", " +
+                                         std::to_string(j) + ") is negative or not finite");
       s += P(i, j);
     }
     if (std::abs(s - 1.0) > 1e-9)
-      throw std::invalid_argument(std::string(who) + ": row " + std::to_string(i) + " sums to " + std::to_string(s) +
-                                  ", not 1");
+      ctxfuse::detail::invalid_setting(std::string(who) + ": row " + std::to_string(i) + " sums to " +
+                                       std::to_string(s) + ", not 1");
   }
 }
 }  // namespace detail
@@ -44,10 +64,13 @@ struct FixedTransition {
   void observe_region(int) {}  // a fixed matrix ignores the recognised region
 };
 
+/// invalid_setting unless 0 <= stay <= 1.
+inline Problem check_sticky(double stay) { return stay >= 0.0 && stay <= 1.0 ? Problem::none : Problem::invalid_setting; }
+
 /// Diagonal-dominant matrix: stay with probability `stay`, the rest spread evenly.
 template <int R>
 SquareMatrix<R> sticky_transition(double stay) {
-  if (!(stay >= 0.0 && stay <= 1.0)) throw std::invalid_argument("sticky_transition: stay must be within [0, 1]");
+  if (check_sticky(stay) != Problem::none) ctxfuse::detail::invalid_setting("sticky_transition: stay must be within [0, 1]");
   SquareMatrix<R> P = SquareMatrix<R>::Constant(R > 1 ? (1.0 - stay) / (R - 1) : 0.0);
   P.diagonal().setConstant(R > 1 ? stay : 1.0);
   return P;
@@ -65,11 +88,19 @@ class RegionAdaptiveTransition {
  public:
   static_assert(Window >= 0);
 
+  /// What the constructor would refuse: a prior that is not row-stochastic
+  /// (transition_matrix_not_stochastic), weights not >= 0 or not summing to 1 (invalid_setting).
+  static Problem check(const SquareMatrix<R>& prior, double w_p, double w_m) {
+    if (Problem p = check_transition<R>(prior); p != Problem::none) return p;
+    if (!(w_p >= 0.0 && w_m >= 0.0 && std::abs(w_p + w_m - 1.0) <= 1e-12)) return Problem::invalid_setting;
+    return Problem::none;
+  }
+
   RegionAdaptiveTransition(const SquareMatrix<R>& prior, double w_p, double w_m) : prior_(prior), w_p_(w_p), w_m_(w_m) {
     detail::require_row_stochastic<R>(prior_, "RegionAdaptiveTransition prior");
-    if (!(w_p >= 0.0 && w_m >= 0.0 && std::abs(w_p + w_m - 1.0) <= 1e-12))
-      throw std::invalid_argument("RegionAdaptiveTransition: need w_p >= 0, w_m >= 0 and w_p + w_m = 1 (got " +
-                                  std::to_string(w_p) + ", " + std::to_string(w_m) + ")");
+    if (check(prior, w_p, w_m) != Problem::none)
+      ctxfuse::detail::invalid_setting("RegionAdaptiveTransition: need w_p >= 0, w_m >= 0 and w_p + w_m = 1 (got " +
+                                       std::to_string(w_p) + ", " + std::to_string(w_m) + ")");
     counts_.setZero();
   }
 
@@ -135,8 +166,11 @@ class RegionAdaptiveTransition {
 template <int R, class Base>
 class PosteriorPull {
  public:
+  /// invalid_setting unless 0 <= lambda <= 1.
+  static Problem check(double lambda) { return lambda >= 0.0 && lambda <= 1.0 ? Problem::none : Problem::invalid_setting; }
+
   PosteriorPull(Base base, double lambda) : base_(std::move(base)), lambda_(lambda) {
-    if (!(lambda >= 0.0 && lambda <= 1.0)) throw std::invalid_argument("PosteriorPull: lambda must be within [0, 1]");
+    if (check(lambda) != Problem::none) ctxfuse::detail::invalid_setting("PosteriorPull: lambda must be within [0, 1]");
     posterior_.setConstant(1.0 / R);
   }
 

@@ -10,9 +10,9 @@
 
 namespace {
 
-using Position = ctxfuse::Block<"p", 2>;
-using Velocity = ctxfuse::Block<"v", 2>;
-using Bias = ctxfuse::Block<"b", 1>;
+using Position = ctxfuse::StateBlock<"p", 2>;
+using Velocity = ctxfuse::StateBlock<"v", 2>;
+using Bias = ctxfuse::StateBlock<"b", 1>;
 using State = ctxfuse::Layout<Position, Velocity, Bias>;
 
 bool check(bool ok, const char* what) {

@@ -24,7 +24,7 @@ namespace ctxfuse::pipelines::gins {
 using Nav15 = models::InsNavModel<models::FullStrapdown>;
 /// The 20-state layout: mounting pitch/heading of the vehicle in the body frame and the lever
 /// arm from the IMU to the vehicle point where the non-holonomic constraint holds.
-using Nav20 = models::Augmented<Nav15, Block<"mount", 2>, Block<"lever", 3>>;
+using Nav20 = models::Augmented<Nav15, StateBlock<"mount", 2>, StateBlock<"lever", 3>>;
 
 template <class Model>
 models::NavState nav_part(const typename Model::State& x) {

@@ -38,7 +38,7 @@
 namespace ctxfuse::pipelines::nlos_uwb {
 
 template <int MaxAnchors>
-using CalibratedLayout = Layout<Block<"p", 2>, Block<"v", 2>, Block<"b", MaxAnchors>>;
+using CalibratedLayout = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>, StateBlock<"b", MaxAnchors>>;
 
 /// MaxAnchors bias slots, taken by anchor id in the order the anchors first range; an anchor
 /// beyond them is used without a bias state. The pipeline's runs (eval/nlos_uwb.hpp) take 16,

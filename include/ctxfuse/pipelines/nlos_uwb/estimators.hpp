@@ -38,7 +38,7 @@
 
 namespace ctxfuse::pipelines::nlos_uwb {
 
-using PlanarLayout = Layout<Block<"p", 2>, Block<"v", 2>>;
+using PlanarLayout = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>>;
 
 /// Range from a tag at a known height (the planar state's "p" at z = tag_height) to an anchor
 /// at a known 3-D position: z = |(p, h) - a| + noise.

@@ -20,6 +20,8 @@
 
 #include <algorithm>
 #include <array>
+#include <concepts>
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -75,19 +77,48 @@ struct UpdateEvent {
   std::array<bool, kMaxTakers> gated{};
 };
 
+/// Watches nothing (the default).
 struct NoObserver {
   void operator()(const UpdateEvent&) const {}
+};
+
+/// A non-owning reference to what watches the updates (anything callable with a const
+/// UpdateEvent&, given by pointer), or to nothing. A run-time value, not a template parameter:
+/// the estimators are compiled once whatever watches them (instances/region_imm.hpp), for one
+/// indirect call per update when something does.
+class UpdateObserver {
+ public:
+  UpdateObserver() = default;
+  UpdateObserver(std::nullptr_t) {}  // NOLINT: no observer
+  template <class F>
+    requires std::invocable<F&, const UpdateEvent&>
+  UpdateObserver(F* f)  // NOLINT: implicit, as the pointer it replaces
+      : object_(const_cast<void*>(static_cast<const void*>(f))), call_(f ? &call<F> : nullptr) {}
+
+  explicit operator bool() const { return call_ != nullptr; }
+  void operator()(const UpdateEvent& e) const {
+    if (call_) call_(object_, e);
+  }
+
+ private:
+  template <class F>
+  static void call(void* object, const UpdateEvent& e) {
+    (*static_cast<F*>(object))(e);
+  }
+
+  void* object_ = nullptr;
+  void (*call_)(void*, const UpdateEvent&) = nullptr;
 };
 
 template <int N>
 using Takes = std::array<std::optional<Status>, static_cast<std::size_t>(N)>;
 
-template <class Core, class Observer = NoObserver>
+template <class Core>
 class Aided {
  public:
   static constexpr int kTakers = Core::kTakers;
 
-  Aided(Core core, const Settings& s, Observer* observer = nullptr)
+  Aided(Core core, const Settings& s, UpdateObserver observer = {})
       : core_(std::move(core)), s_(s), observer_(observer), integrity_{s} {
     health_.fill(FilterHealth(s));
   }
@@ -173,12 +204,12 @@ class Aided {
       ev.offered[w] = std::any_of(ev.offered.begin(), ev.offered.begin() + kTakers, [](bool b) { return b; });
       ev.gated[w] = !any_accepted && any_gated;
     }
-    if (observer_) (*observer_)(ev);
+    observer_(ev);
   }
 
   Core core_;
   const Settings& s_;
-  Observer* observer_;
+  UpdateObserver observer_;
   std::array<FilterHealth, static_cast<std::size_t>(kTakers)> health_{};
   std::optional<FilterHealth> whole_ = Core::kWhole ? std::optional<FilterHealth>(FilterHealth(s_)) : std::nullopt;
   UwbIntegrity integrity_;

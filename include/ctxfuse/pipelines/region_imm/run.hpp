@@ -146,24 +146,25 @@ inline policies::PosteriorPull<3, policies::RegionAdaptiveTransition<3>> make_mi
 
 }  // namespace detail
 
-/// Runs one estimator over the log; `observer` sees every GNSS and UWB update of the
-/// IMU-driven estimators (aided.hpp, UpdateEvent). Throws std::invalid_argument when the log
-/// cannot drive the pipeline (no IMU, no epochs, never aligned) or a region IMM lacks its
-/// regions.
-template <class Observer = NoObserver>
-RunResult run(const io::SensorLog& log, Estimator e, const Settings& s, const RunOptions& o = {}, Observer* observer = nullptr) {
+namespace detail {
+/// run()'s body. A template only so that the compiled target ctxfuse::instances can hold its one
+/// instance (instances/region_imm.hpp declares it extern): every estimator below is instantiated
+/// here, the cost of a source that calls run().
+template <class = void>
+RunResult run_any(const io::SensorLog& log, Estimator e, const Settings& s, const RunOptions& o,
+                  UpdateObserver observer) {
   auto aided = [&](auto core) {
-    Aided<decltype(core), Observer> est(std::move(core), s, observer);
-    return detail::replay_log(log, est, s, o);
+    Aided<decltype(core)> est(std::move(core), s, observer);
+    return replay_log(log, est, s, o);
   };
   switch (e) {
     case Estimator::gnss: {
       GnssOnly est;
-      return detail::replay_log(log, est, s, o);
+      return replay_log(log, est, s, o);
     }
     case Estimator::uwb: {
       UwbOnly est{.s = s};
-      return detail::replay_log(log, est, s, o);
+      return replay_log(log, est, s, o);
     }
     case Estimator::odr:
     case Estimator::iotr:
@@ -176,21 +177,31 @@ RunResult run(const io::SensorLog& log, Estimator e, const Settings& s, const Ru
     case Estimator::fkf_static: return aided(FederatedCore{&s, true});
     case Estimator::imm: {
       using M = policies::FixedTransition<3>;
-      return aided(ImmCore<M>{&s, detail::make_mixing<M>(s), nullptr});
+      return aided(ImmCore<M>{&s, make_mixing<M>(s), nullptr});
     }
     case Estimator::region_imm: {
       if (!o.regions) throw std::invalid_argument("region_imm: the region-aware IMM needs the recognised regions");
       using M = policies::RegionAdaptiveTransition<3>;
-      return aided(ImmCore<M>{&s, detail::make_mixing<M>(s), o.regions});
+      return aided(ImmCore<M>{&s, make_mixing<M>(s), o.regions});
     }
     case Estimator::region_imm_posterior: {
       if (!o.regions || o.regions->posterior.size() != o.regions->t.size())
         throw std::invalid_argument("region_imm: the posterior-pull IMM needs the recognised regions and their posteriors");
       using M = policies::PosteriorPull<3, policies::RegionAdaptiveTransition<3>>;
-      return aided(ImmCore<M>{&s, detail::make_mixing<M>(s), o.regions});
+      return aided(ImmCore<M>{&s, make_mixing<M>(s), o.regions});
     }
   }
   throw std::invalid_argument("region_imm: unknown estimator");
+}
+}  // namespace detail
+
+/// Runs one estimator over the log; `observer` (a pointer to anything callable with a const
+/// UpdateEvent&) sees every GNSS and UWB update of the IMU-driven estimators (aided.hpp).
+/// Throws std::invalid_argument when the log cannot drive the pipeline (no IMU, no epochs,
+/// never aligned) or a region IMM lacks its regions.
+inline RunResult run(const io::SensorLog& log, Estimator e, const Settings& s, const RunOptions& o = {},
+                     UpdateObserver observer = {}) {
+  return detail::run_any(log, e, s, o, observer);
 }
 
 }  // namespace ctxfuse::pipelines::region_imm

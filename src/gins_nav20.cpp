@@ -1,5 +1,5 @@
-// The one compiled instance of the GNSS/INS pipeline for Nav20 (gins_nav20.hpp).
-#include "gins_nav20.hpp"
+// The one compiled instance of the GNSS/INS pipeline for Nav20 (ctxfuse/instances/gins_nav20.hpp).
+#include "ctxfuse/instances/gins_nav20.hpp"
 
 namespace ctxfuse::pipelines::gins {
 
@@ -9,7 +9,7 @@ template TrajectoryRow trajectory_row<Nav20>(double, const eskf::Belief<Nav20>&,
 
 }  // namespace ctxfuse::pipelines::gins
 
-namespace ctxfuse::test {
+namespace ctxfuse::instances {
 
 using pipelines::gins::Nav20;
 
@@ -31,4 +31,4 @@ const pipelines::gins::PassCounts& GinsNav20Pass::counts() const { return pass_-
 const std::vector<RtsRecorder<Nav20>::Record>& GinsNav20Pass::records() const { return pass_->recorder().records(); }
 const Eigen::Vector3d& GinsNav20Pass::gnss_lever() const { return pass_->gnss_lever(); }
 
-}  // namespace ctxfuse::test
+}  // namespace ctxfuse::instances

@@ -1,13 +1,15 @@
-// The GNSS/INS pipeline for the 20-state layout (pipelines/gins) compiled once: gins_nav20.cpp
-// holds the explicit instantiations and the definitions below, in the static library
-// ctxfuse_gins_nav20 (gins_nav20.cmake), which the gins and reliability tests that run the
-// pipeline, bench_gins_drive and the ctxfuse tool link instead of each compiling the forward
-// pass (the 20-state prediction, its updates, the RTS smoother) for itself.
+// The GNSS/INS pipeline for the 20-state layout (pipelines/gins) compiled once, part of the
+// optional compiled target ctxfuse::instances (src/, docs/architecture.md): src/gins_nav20.cpp
+// holds the explicit instantiations and the definitions below. A source that links
+// ctxfuse::instances and includes this header does not compile the forward pass (the 20-state
+// prediction, its updates, the RTS smoother) for itself; the tool, the gins and reliability
+// tests that run the pipeline and bench_gins_drive do. Header-only users include
+// pipelines/gins/run.hpp instead and need nothing else.
 //
 // `extern template` keeps a source that includes this header from instantiating gins::run and
 // gins::trajectory_row (non-inline templates). It cannot do that for the members of
 // ForwardPass, which are inline (defined in its class body): a source that steps the pass
-// itself uses test::GinsNav20Pass, whose members are defined in gins_nav20.cpp.
+// itself uses instances::GinsNav20Pass, whose members are defined in src/gins_nav20.cpp.
 #pragma once
 
 #include <memory>
@@ -24,7 +26,7 @@ extern template TrajectoryRow trajectory_row<Nav20>(double, const eskf::Belief<N
 
 }  // namespace ctxfuse::pipelines::gins
 
-namespace ctxfuse::test {
+namespace ctxfuse::instances {
 
 /// gins::ForwardPass<Nav20> with the same members (those a replay handler and its caller use),
 /// defined out of line. The settings are held by reference, as ForwardPass holds them.
@@ -53,4 +55,4 @@ class GinsNav20Pass {
   std::unique_ptr<pipelines::gins::ForwardPass<pipelines::gins::Nav20>> pass_;
 };
 
-}  // namespace ctxfuse::test
+}  // namespace ctxfuse::instances

@@ -1,0 +1,30 @@
+// Settings outside their range at construction, where no Status can be returned (a transition
+// matrix that is not row-stochastic, federated shares that do not sum to 1, an integrity
+// probability outside (0, 1)). With exceptions, the constructor throws std::invalid_argument
+// naming the setting. Compiled with -fno-exceptions, it prints that message to stderr and
+// aborts. Code that must not stop checks first: each such constructor has a check function
+// beside it that returns Problem::invalid_setting (or a more specific Problem) instead, and a
+// constructor given settings its check accepted does not fail. Steps (predict, update, mix...)
+// never throw and never abort: they return a Status.
+#pragma once
+
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#if defined(__cpp_exceptions) || defined(__EXCEPTIONS)
+#include <stdexcept>
+#endif
+
+namespace ctxfuse::detail {
+
+[[noreturn]] inline void invalid_setting(const std::string& what) {
+#if defined(__cpp_exceptions) || defined(__EXCEPTIONS)
+  throw std::invalid_argument(what);
+#else
+  std::fprintf(stderr, "ctxfuse: invalid setting: %s\n", what.c_str());
+  std::abort();
+#endif
+}
+
+}  // namespace ctxfuse::detail

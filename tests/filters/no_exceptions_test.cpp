@@ -1,0 +1,68 @@
+// The library's lower layers (core, models, filters, policies: every header, through the
+// generated all_lower_headers.hpp) compiled with -fno-exceptions, as embedded stacks build:
+// construction-time checks return a Problem, steps return a Status, and a constructor given a
+// setting its check refuses stops the program with the setting named (core/error.hpp).
+#if defined(__cpp_exceptions) || defined(__EXCEPTIONS)
+#error "this test must be compiled with -fno-exceptions (tests/filters/CMakeLists.txt)"
+#endif
+
+#include <gtest/gtest.h>
+
+#include "all_lower_headers.hpp"
+
+namespace {
+using namespace ctxfuse;
+
+using L = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>>;
+using Cv = models::ConstantVelocity<L, 2>;
+using Pos = models::BlockObservation<L, "p">;
+
+Gaussian<4> prior() { return {Vector<4>(0.0, 0.0, 1.0, 0.0), SquareMatrix<4>::Identity()}; }
+
+TEST(NoExceptions, StepsReportWithStatuses) {
+  Ekf<Cv, ChiSquareGate> ekf(Cv{}, prior(), {}, ChiSquareGate(0.99));
+  ekf.set_time(0.0);
+  ASSERT_TRUE(ekf.predict_to(1.0, NoInput{}));
+  EXPECT_EQ(ekf.predict_to(0.5, NoInput{}).problem, Problem::out_of_order_time);
+  EXPECT_EQ(ekf.update(Pos{}, Vector<2>(std::nan(""), 0.0)).problem, Problem::non_finite_measurement);
+  EXPECT_EQ(ekf.update(Pos{}, Eigen::VectorXd::Zero(3)).problem, Problem::measurement_wrong_size);
+  const Status s = ekf.update(Pos{}, Vector<2>(1.0, 0.0));
+  ASSERT_TRUE(s.accepted()) << describe(s.problem);
+  EXPECT_NEAR(ekf.belief().mean(0), 1.0, 1e-12);  // the predicted position, measured exactly
+}
+
+TEST(NoExceptions, SettingsAreCheckedWithoutThrowing) {
+  SquareMatrix<2> bad;
+  bad << 0.9, 0.2, 0.1, 0.9;  // first row sums to 1.1
+  EXPECT_EQ(policies::check_transition<2>(bad), Problem::transition_matrix_not_stochastic);
+  EXPECT_EQ(policies::check_transition<2>(policies::sticky_transition<2>(0.9)), Problem::none);
+  EXPECT_EQ(policies::check_sticky(1.5), Problem::invalid_setting);
+  EXPECT_EQ(policies::RegionAdaptiveTransition<2>::check(policies::sticky_transition<2>(0.9), 0.5, 0.6),
+            Problem::invalid_setting);
+  EXPECT_EQ(policies::RegionAdaptiveTransition<2>::check(bad, 0.5, 0.5), Problem::transition_matrix_not_stochastic);
+  EXPECT_EQ((policies::PosteriorPull<2, policies::FixedTransition<2>>::check(-0.1)), Problem::invalid_setting);
+  EXPECT_EQ((fkf::FederatedFilter<Cv, 2>::check_shares({0.5, 0.6})), Problem::invalid_setting);
+  EXPECT_EQ((fkf::FederatedFilter<Cv, 2>::check_shares({0.5, 0.5})), Problem::none);
+  EXPECT_EQ(policies::check_options(policies::SnapshotIntegrityOptions{.probability = 1.0}), Problem::invalid_setting);
+  EXPECT_EQ(policies::check_options(policies::SnapshotIntegrityOptions{}), Problem::none);
+}
+
+TEST(NoExceptions, AnImmRunsOnCheckedSettings) {
+  const SquareMatrix<2> P = policies::sticky_transition<2>(0.95);
+  ASSERT_EQ(policies::check_transition<2>(P), Problem::none);
+  auto modes = boost::hana::make_tuple(imm::make_mode(Cv{0.05}), imm::make_mode(Cv{5.0}));
+  imm::Imm filter(policies::FixedTransition<2>(P), modes, prior(), Vector<2>(0.5, 0.5));
+  struct Fix {};
+  const auto r = filter.cycle({}, 0.5, imm::observe(Fix{}, Pos{}, Vector<2>(0.5, 0.0)));
+  ASSERT_TRUE(r.status().accepted());
+  EXPECT_NEAR(filter.mode_probabilities().sum(), 1.0, 1e-12);
+}
+
+TEST(NoExceptionsDeathTest, AConstructorGivenARefusedSettingStopsNamingIt) {
+  SquareMatrix<2> bad;
+  bad << 0.9, 0.2, 0.1, 0.9;
+  EXPECT_DEATH(policies::FixedTransition<2>{bad}, "invalid setting: FixedTransition: row 0 sums to 1.1");
+  EXPECT_DEATH((fkf::FederatedFilter<Cv, 2>(Cv{}, prior(), {0.5, 0.6})), "invalid setting: FederatedFilter");
+}
+
+}  // namespace
