@@ -6,7 +6,7 @@
 #include "ctxfuse/io/nmea.hpp"
 #include "fuzz_support.hpp"
 
-namespace nmea = ctxfuse::features::nmea;
+namespace nmea = ctxfuse::io::nmea;
 using ctxfuse_fuzz::fail;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

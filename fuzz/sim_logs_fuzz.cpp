@@ -1,4 +1,4 @@
-// io/sim_logs.hpp: a log folder in which one file (chosen by the first byte) holds the rest
+// sim/logs.hpp: a log folder in which one file (chosen by the first byte) holds the rest
 // of the input and the others hold only their header; selector 7 splits the rest
 // (fuzz_support.hpp, split2) into gnss.csv and sats.csv, whose epochs the reader
 // cross-checks. The folder is then read as a pipeline reads it (read_sim_logs, which also
@@ -6,11 +6,11 @@
 #include <cmath>
 #include <string>
 
-#include "ctxfuse/io/sim_logs.hpp"
+#include "ctxfuse/sim/logs.hpp"
 #include "fuzz_support.hpp"
 
 namespace io = ctxfuse::io;
-namespace csv = ctxfuse::io::sim_csv;
+namespace csv = ctxfuse::sim::csv;
 using ctxfuse_fuzz::fail;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -31,7 +31,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     s.write("sats.csv", sats);
   }
   try {
-    const auto logs = io::read_sim_logs(s.dir());
+    const auto logs = ctxfuse::sim::read_sim_logs(s.dir());
     const auto& truth = logs.truth.truth;
     for (std::size_t i = 0; i < truth.size(); ++i) {
       if (!std::isfinite(truth[i].t)) fail("non-finite truth time accepted");

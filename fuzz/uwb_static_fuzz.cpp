@@ -8,17 +8,16 @@
 #include "fuzz_support.hpp"
 
 namespace io = ctxfuse::io;
-namespace features = ctxfuse::features;
 using ctxfuse_fuzz::fail;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const auto [name, csv] = ctxfuse_fuzz::split2(data, size);
-  (void)features::detail::number_in_name(name, "height_", "cm");
-  (void)features::detail::number_in_name(name, "", "m.csv");
+  (void)ctxfuse::io::detail::number_in_name(name, "height_", "cm");
+  (void)ctxfuse::io::detail::number_in_name(name, "", "m.csv");
   const auto path = ctxfuse_fuzz::scratch().write("10m.csv", csv);
-  features::UwbStaticReadStats stats;
+  ctxfuse::io::UwbStaticReadStats stats;
   try {
-    const auto ranges = features::read_uwb_static_file(path, 10.0, true, 50.0, stats);
+    const auto ranges = ctxfuse::io::read_uwb_static_file(path, 10.0, true, 50.0, stats);
     if (stats.files != 1 || stats.ranges != ranges.size()) fail("read statistics do not add up");
     for (const auto& r : ranges)
       if (!(r.measured_distance_m >= 0.0 && r.measured_distance_m <= 1000.0) || !std::isfinite(r.rssi_dbm) ||

@@ -3,7 +3,7 @@
 
 namespace ctxfuse::pipelines::gins {
 
-template RunResult run<Nav20>(std::span<const io::ImuSample>, std::span<const io::GnssFix>, const Settings&,
+template RunResult run<Nav20>(std::span<const messages::ImuSample>, std::span<const messages::GnssFix>, const Settings&,
                               const RunOptions&);
 template TrajectoryRow trajectory_row<Nav20>(double, const eskf::Belief<Nav20>&, const Eigen::Vector3d&);
 
@@ -19,10 +19,10 @@ GinsNav20Pass::GinsNav20Pass(const pipelines::gins::Settings& s, const pipelines
     : pass_(std::make_unique<pipelines::gins::ForwardPass<Nav20>>(s, inst, c, std::move(windows), gnss_rate_hz)) {}
 GinsNav20Pass::~GinsNav20Pass() = default;
 
-void GinsNav20Pass::propagate(const io::ImuSample& u, double dt) { pass_->propagate(u, dt); }
-void GinsNav20Pass::on(const io::ImuSample& u) { pass_->on(u); }
-void GinsNav20Pass::on(const io::MagSample& m) { pass_->on(m); }
-void GinsNav20Pass::on(const io::GnssFix& fix) { pass_->on(fix); }
+void GinsNav20Pass::propagate(const messages::ImuSample& u, double dt) { pass_->propagate(u, dt); }
+void GinsNav20Pass::on(const messages::ImuSample& u) { pass_->on(u); }
+void GinsNav20Pass::on(const messages::MagSample& m) { pass_->on(m); }
+void GinsNav20Pass::on(const messages::GnssFix& fix) { pass_->on(fix); }
 void GinsNav20Pass::finish() { pass_->finish(); }
 
 bool GinsNav20Pass::aligned() const { return pass_->aligned(); }

@@ -3,6 +3,6 @@
 
 namespace ctxfuse::pipelines::region_imm::detail {
 
-template RunResult run_any<void>(const io::SensorLog&, Estimator, const Settings&, const RunOptions&, UpdateObserver);
+template RunResult run_any<void>(const messages::SensorLog&, Estimator, const Settings&, const RunOptions&, UpdateObserver);
 
 }  // namespace ctxfuse::pipelines::region_imm::detail

@@ -236,7 +236,7 @@ struct EpochChain {
   Smoother::Measurements classify(long k, bool attach_all = false) {
     const auto& now = drive().ranges[static_cast<std::size_t>(k % Drive::period)];
     for (std::size_t a = 0; a < kRangesPerEpoch; ++a) {
-      io::UwbRange r;
+      messages::UwbRange r;
       r.t = static_cast<double>(k) * dt;
       r.anchor_id = static_cast<int>(a);
       r.range_m = now[a];

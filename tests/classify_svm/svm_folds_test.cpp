@@ -63,7 +63,7 @@ TEST(SvmFolds, GroupsStayWholeLeaveOneOutAndBalanced) {
 TEST(SvmFolds, BalancedAccuracyAndMacroF1ByHand) {
   // truth 0: 8 samples (6 right, 2 as 1); truth 1: 2 samples (1 right, 1 as 0); truth 2: none,
   // but one class-0 sample predicted 2 -> counts: row0 = {5, 2, 1}, row1 = {1, 1, 0}.
-  ctxfuse::eval::ConfusionMatrix m(3);
+  ctxfuse::classify::ConfusionMatrix m(3);
   for (int i = 0; i < 5; ++i) m.add(0, 0);
   m.add(0, 1), m.add(0, 1), m.add(0, 2), m.add(1, 1), m.add(1, 0);
   // recalls: 5/8 and 1/2 (class 2 has no support) -> (0.625 + 0.5) / 2
@@ -72,13 +72,13 @@ TEST(SvmFolds, BalancedAccuracyAndMacroF1ByHand) {
   EXPECT_DOUBLE_EQ(m.macro_f1(), (10.0 / 14.0 + 2.0 / 5.0) / 2.0);
   EXPECT_DOUBLE_EQ(m.accuracy(), 0.6);
   // Always answering the majority class: balanced accuracy 1/2, macro-F1 = F1 of the majority / 2.
-  ctxfuse::eval::ConfusionMatrix major(2);
+  ctxfuse::classify::ConfusionMatrix major(2);
   for (int i = 0; i < 9; ++i) major.add(0, 0);
   major.add(1, 0);
   EXPECT_DOUBLE_EQ(major.accuracy(), 0.9);
   EXPECT_DOUBLE_EQ(major.balanced_accuracy(), 0.5);
   EXPECT_DOUBLE_EQ(major.macro_f1(), (18.0 / 19.0) / 2.0);
-  EXPECT_TRUE(std::isnan(ctxfuse::eval::ConfusionMatrix(2).balanced_accuracy()));
+  EXPECT_TRUE(std::isnan(ctxfuse::classify::ConfusionMatrix(2).balanced_accuracy()));
 }
 
 TEST(SvmFolds, InverseFrequencyWeights) {

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <vector>
 
-#include "ctxfuse/eval/classification.hpp"
+#include "ctxfuse/classify/confusion_matrix.hpp"
 #include "ctxfuse/eval/position_error.hpp"
 
 namespace ev = ctxfuse::eval;
@@ -77,7 +77,7 @@ TEST(EvalConfusion, HandComputedScores) {
   // (0,0)=2 (0,1)=1 (1,1)=1 (1,2)=1 (2,2)=3 (2,0)=1 -> accuracy 6/9;
   // precision: 2/3, 1/2, 3/4; recall: 2/3, 1/2, 3/4; class 3 absent.
   const std::vector<int> t{0, 0, 0, 1, 1, 2, 2, 2, 2}, p{0, 0, 1, 1, 2, 2, 2, 0, 2};
-  auto m = ev::ConfusionMatrix::from_labels(t, p, 4);
+  auto m = ctxfuse::classify::ConfusionMatrix::from_labels(t, p, 4);
   EXPECT_EQ(m.total(), 9u);
   EXPECT_EQ(m.count(2, 0), 1u);
   EXPECT_EQ(m.count(0, 1), 1u);
@@ -96,11 +96,11 @@ TEST(EvalConfusion, HandComputedScores) {
   EXPECT_THROW(m.add(-1, 0), std::out_of_range);
   EXPECT_EQ(m.total(), 9u);  // unchanged by the rejected samples
   EXPECT_THROW((void)m.precision(7), std::out_of_range);
-  EXPECT_THROW((void)ev::ConfusionMatrix::from_labels(t, std::vector<int>{0}, 3), std::invalid_argument);
-  EXPECT_THROW(ev::ConfusionMatrix(0), std::invalid_argument);
-  EXPECT_TRUE(std::isnan(ev::ConfusionMatrix(2).accuracy()));
+  EXPECT_THROW((void)ctxfuse::classify::ConfusionMatrix::from_labels(t, std::vector<int>{0}, 3), std::invalid_argument);
+  EXPECT_THROW(ctxfuse::classify::ConfusionMatrix(0), std::invalid_argument);
+  EXPECT_TRUE(std::isnan(ctxfuse::classify::ConfusionMatrix(2).accuracy()));
   // Binary NLOS detection as in paper C: precision = TP/(TP+FP), recall = TP/(TP+FN).
-  ev::ConfusionMatrix b(2);
+  ctxfuse::classify::ConfusionMatrix b(2);
   for (int i = 0; i < 8; ++i) b.add(1, 1);  // TP 8
   for (int i = 0; i < 2; ++i) b.add(1, 0);  // FN 2
   for (int i = 0; i < 4; ++i) b.add(0, 1);  // FP 4

@@ -8,11 +8,11 @@
 #include "ctxfuse/filters/factors.hpp"
 #include "ctxfuse/models/kinematic.hpp"
 #include "ctxfuse/models/linear.hpp"
-#include "support/numerical_jacobian.hpp"
+#include "ctxfuse/testing/jacobians.hpp"
 
 namespace {
 using namespace ctxfuse;
-using test::central_jacobian;
+using ctxfuse::testing::central_jacobian;
 
 using PV3 = Layout<StateBlock<"p", 3>, StateBlock<"v", 3>>;
 using PV2 = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>>;

@@ -11,7 +11,7 @@
 #include <numbers>
 #include <vector>
 
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/smoother.hpp"
 #include "ctxfuse/sim/random.hpp"
 
@@ -20,7 +20,7 @@ namespace ctxfuse::test {
 struct UwbReplay {
   static constexpr double dt = 0.1, radius = 20.0, speed = 3.0;
   static constexpr int epochs_per_minute = 600;
-  std::vector<std::array<io::UwbRange, 4>> epochs;
+  std::vector<std::array<messages::UwbRange, 4>> epochs;
   std::vector<std::array<bool, 4>> attach;
 
   explicit UwbReplay(int minutes = 10) {
@@ -56,8 +56,8 @@ struct UwbReplay {
 
   /// The circle's IMU (body forward-left-up): yaw rate v / r, the centripetal v^2 / r to the
   /// left, gravity's reaction up; for the smoother with IMU factors (imu_smoother.hpp).
-  static io::ImuSample imu() {
-    io::ImuSample u;
+  static messages::ImuSample imu() {
+    messages::ImuSample u;
     u.gyro = Eigen::Vector3d(0.0, 0.0, speed / radius);
     u.accel = Eigen::Vector3d(0.0, speed * speed / radius, 9.81);
     return u;
@@ -85,7 +85,7 @@ struct UwbReplay {
   template <class S>
   bool step(S& s, std::size_t k) const {
     std::array<Status, 4> st{};
-    return s.apply_epoch(std::span<const io::UwbRange>(epochs[k]), std::span<const bool>(attach[k]), std::span<Status>(st)).accepted();
+    return s.apply_epoch(std::span<const messages::UwbRange>(epochs[k]), std::span<const bool>(attach[k]), std::span<Status>(st)).accepted();
   }
 };
 

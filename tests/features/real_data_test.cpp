@@ -27,6 +27,7 @@
 namespace {
 
 using namespace ctxfuse::features;
+using namespace ctxfuse::io;
 
 TEST(RealData, MountainViewNmeaParsesAndLabels) {
   CTXFUSE_REQUIRE_DATA(nmea_path, "gnss-nmea-mtv/mtv_f9k.nmea");

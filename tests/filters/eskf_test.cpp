@@ -6,7 +6,7 @@
 #include "ctxfuse/filters/eskf.hpp"
 #include "ctxfuse/models/ins.hpp"
 #include "ctxfuse/models/kinematic.hpp"
-#include "support/numerical_jacobian.hpp"
+#include "ctxfuse/testing/jacobians.hpp"
 
 namespace {
 using namespace ctxfuse;
@@ -34,7 +34,7 @@ TEST(Eskf, ResetJacobianIsTheDerivativeOfTheErrorReparametrisation) {
   const InsState x_new = m.inject(x, dx);
   auto e_new = [&](const Vector<15>& e_old) -> Vector<15> { return m.difference(m.inject(x, e_old), x_new); };
   EXPECT_LT(e_new(dx).norm(), 1e-12);
-  const SquareMatrix<15> G_num = test::central_jacobian<15, 15>(e_new, dx, 1e-6);
+  const SquareMatrix<15> G_num = ctxfuse::testing::central_jacobian<15, 15>(e_new, dx, 1e-6);
   const SquareMatrix<15> G = m.reset_jacobian(x, dx);
   EXPECT_LT((G - G_num).cwiseAbs().maxCoeff(), 1e-8);
   // And the common first-order form I - [dtheta/2]x is only an approximation of it.

@@ -13,10 +13,10 @@
 namespace {
 using namespace ctxfuse;
 
-std::vector<io::UwbRange> exact_ranges(const Eigen::Vector3d& tag, std::span<const Eigen::Vector3d> anchors) {
-  std::vector<io::UwbRange> out;
+std::vector<messages::UwbRange> exact_ranges(const Eigen::Vector3d& tag, std::span<const Eigen::Vector3d> anchors) {
+  std::vector<messages::UwbRange> out;
   for (std::size_t a = 0; a < anchors.size(); ++a) {
-    io::UwbRange r;
+    messages::UwbRange r;
     r.anchor_id = static_cast<int>(a);
     r.anchor_position = anchors[a];
     r.range_m = (tag - anchors[a]).norm();

@@ -4,7 +4,7 @@
 
 #include "ctxfuse/core/block_state.hpp"
 #include "states.hpp"
-#include "support/numerical_jacobian.hpp"
+#include "ctxfuse/testing/jacobians.hpp"
 
 namespace {
 using namespace ctxfuse;

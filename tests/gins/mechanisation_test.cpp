@@ -159,7 +159,7 @@ TEST(ImuInput, AppliesMountingAndDelayAndRefusesBadStamps) {
   ImuInput in;
   in.body_from_imu = mounting_rotation(180.0 * kDeg, 0.0, 0.0);  // IMU upside down
   in.delay_s = -0.125;
-  io::ImuSample s;
+  messages::ImuSample s;
   s.t = 10.0;
   s.accel = Eigen::Vector3d(0.0, 0.0, 9.8);
   s.gyro = Eigen::Vector3d(0.0, 0.01, 0.02);
@@ -167,20 +167,20 @@ TEST(ImuInput, AppliesMountingAndDelayAndRefusesBadStamps) {
   double dt = 0.0;
   EXPECT_EQ(in.next(s, u, dt).problem, Problem::time_not_set);  // the first sample starts the clock
   EXPECT_DOUBLE_EQ(in.apply_delay(s).t, 9.875);
-  io::ImuSample same = s;
+  messages::ImuSample same = s;
   EXPECT_EQ(in.next(same, u, dt).problem, Problem::non_positive_dt);
-  io::ImuSample back = s;
+  messages::ImuSample back = s;
   back.t = 9.9;
   EXPECT_EQ(in.next(back, u, dt).problem, Problem::out_of_order_time);
-  io::ImuSample nan = s;
+  messages::ImuSample nan = s;
   nan.t = std::nan("");
   EXPECT_EQ(in.next(nan, u, dt).problem, Problem::non_finite_dt);
-  io::ImuSample absurd = s;
+  messages::ImuSample absurd = s;
   absurd.t = 10.01;
   absurd.gyro = Eigen::Vector3d(100.0, 0.0, 0.0);
   EXPECT_EQ(in.next(absurd, u, dt).problem, Problem::input_magnitude);
   // After the refusals the adapter is where it was: the next good sample gets dt from 10.0.
-  io::ImuSample next = s;
+  messages::ImuSample next = s;
   next.t = 10.02;
   ASSERT_TRUE(in.next(next, u, dt).accepted());
   EXPECT_NEAR(dt, 0.02, 1e-15);
@@ -192,7 +192,7 @@ TEST(ImuInput, AppliesMountingAndDelayAndRefusesBadStamps) {
   // constant rate, and the previous increment is carried for coning and sculling.
   ImuInput inc = in;
   inc.restart();
-  io::ImuSample a = s, b = s;
+  messages::ImuSample a = s, b = s;
   a.increments = b.increments = true;
   a.accel *= 0.01;
   a.gyro *= 0.01;

@@ -43,11 +43,11 @@ TEST(GinsOutageProtocol, DecimationKeepsOneFixPerPeriodFromTheFirst) {
 }
 
 TEST(GinsOutageProtocol, ReferenceIsTheRtkFixedEpochsOnly) {
-  std::vector<io::GnssFix> fixes(4);
-  const io::FixQuality q[] = {io::FixQuality::fixed, io::FixQuality::floating, io::FixQuality::single, io::FixQuality::fixed};
+  std::vector<messages::GnssFix> fixes(4);
+  const messages::FixQuality q[] = {messages::FixQuality::fixed, messages::FixQuality::floating, messages::FixQuality::single, messages::FixQuality::fixed};
   for (int i = 0; i < 4; ++i) {
     fixes[i].t = i;
-    fixes[i].frame = io::PositionFrame::geodetic;
+    fixes[i].frame = messages::PositionFrame::geodetic;
     fixes[i].position = {40.0 + i, -105.0, 1600.0};
     fixes[i].quality = q[i];
   }

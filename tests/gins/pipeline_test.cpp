@@ -20,9 +20,9 @@ namespace gins = ctxfuse::pipelines::gins;
 constexpr double kT0 = 1.75e9;  // a GPS-like epoch, so stamps carry the recording's magnitude
 
 struct SimRecording {
-  std::vector<io::ImuSample> imu;
-  std::vector<io::GnssFix> fixes;   // 4 Hz, 2 cm noise, the filter's input
-  std::vector<io::MagSample> mag;   // 10 Hz, IMU (= body) axes, 0.05 uT noise
+  std::vector<messages::ImuSample> imu;
+  std::vector<messages::GnssFix> fixes;   // 4 Hz, 2 cm noise, the filter's input
+  std::vector<messages::MagSample> mag;   // 10 Hz, IMU (= body) axes, 0.05 uT noise
   std::vector<eval::TimedLatLon> truth;
   std::vector<std::pair<double, double>> heading;  // (t, true heading [rad]) at each fix
 };
@@ -53,9 +53,9 @@ const SimRecording& recording() {
       s.heading.emplace_back(kT0 + st.t, models::heading_of(C_nb));
       const Eigen::Vector3d llh = st.truth.get<"p">();
       s.truth.push_back({kT0 + st.t, llh(0), llh(1)});
-      io::GnssFix f;
+      messages::GnssFix f;
       f.t = kT0 + st.t;
-      f.frame = io::PositionFrame::geodetic;
+      f.frame = messages::PositionFrame::geodetic;
       // Draws in index order (an argument list's order of evaluation differs between compilers).
       auto draw3 = [&] {
         Eigen::Vector3d n;
@@ -68,7 +68,7 @@ const SimRecording& recording() {
       const Eigen::Vector3d v = st.truth.get<"v">();
       f.velocity = Eigen::Vector3d(v(1), v(0), -v(2)) + 0.02 * draw3();
       f.velocity_cov = Eigen::Matrix3d::Identity() * 0.02 * 0.02;
-      f.quality = io::FixQuality::fixed;
+      f.quality = messages::FixQuality::fixed;
       s.fixes.push_back(f);
     }
     return s;
@@ -191,7 +191,7 @@ TEST(GinsPipeline, MagnetometerStreamHoldsTheHeadingThroughTheOutage) {
 // With releases off it is not.
 TEST(GinsPipeline, GnssPositionAndVelocityAreReleasedAfterAnImuFault) {
   const double t_first = recording().fixes.front().t;
-  std::vector<io::ImuSample> imu = recording().imu;
+  std::vector<messages::ImuSample> imu = recording().imu;
   for (auto& u : imu)
     if (u.t >= t_first + 20.0 && u.t < t_first + 35.0) u.accel.x() += 0.6;
   gins::RunOptions o;
@@ -244,9 +244,9 @@ TEST(GinsPipeline, GnssPositionAndVelocityAreReleasedAfterAnImuFault) {
 // unmeasured time, so the pass is never lost, and it tracks as at 100 Hz.
 TEST(GinsPipeline, ASlowImuIsNeverTakenForAGap) {
   const auto& fast = recording().imu;
-  std::vector<io::ImuSample> slow;
+  std::vector<messages::ImuSample> slow;
   for (std::size_t k = 0; k + 10 <= fast.size(); k += 10) {
-    io::ImuSample u = fast[k];
+    messages::ImuSample u = fast[k];
     for (std::size_t j = 1; j < 10; ++j) {
       u.gyro += fast[k + j].gyro;
       u.accel += fast[k + j].accel;

@@ -17,8 +17,8 @@ namespace {
 using namespace ctxfuse;
 namespace gins = ctxfuse::pipelines::gins;
 
-std::vector<io::ImuSample> imu_of(const sim::PlatformRun& run) {
-  std::vector<io::ImuSample> out;
+std::vector<messages::ImuSample> imu_of(const sim::PlatformRun& run) {
+  std::vector<messages::ImuSample> out;
   out.reserve(run.imu.size());
   for (const auto& s : run.imu) out.push_back({s.t_gps, s.gyro, s.accel, false});
   return out;
@@ -68,7 +68,7 @@ TEST(PlatformRunSim, TheRecordingIsWhatItWasConfiguredToBe) {
   EXPECT_LT(f.head<2>().norm(), 5.0 * c.accel_bias_sigma);
   // Float stretches: their share of the epochs near float_share (whole stretches, may overlap).
   std::size_t floats = 0;
-  for (const auto& fx : r.fixes) floats += fx.quality == io::FixQuality::floating;
+  for (const auto& fx : r.fixes) floats += fx.quality == messages::FixQuality::floating;
   const double share = static_cast<double>(floats) / static_cast<double>(r.fixes.size());
   EXPECT_GT(share, 0.05);
   EXPECT_LE(share, c.float_share + 1e-9);

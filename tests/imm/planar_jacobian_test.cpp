@@ -1,5 +1,5 @@
 // Planar model and its measurements: analytic Jacobians against central differences
-// (tests/support/numerical_jacobian.hpp), the range and body velocity against hand values.
+// (ctxfuse/testing/jacobians.hpp), the range and body velocity against hand values.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -7,7 +7,7 @@
 #include "ctxfuse/core/concepts.hpp"
 #include "ctxfuse/models/ins_range.hpp"
 #include "ctxfuse/models/planar.hpp"
-#include "support/numerical_jacobian.hpp"
+#include "ctxfuse/testing/jacobians.hpp"
 
 namespace {
 using namespace ctxfuse;
@@ -35,7 +35,7 @@ TEST(PlanarModel, ProcessJacobianMatchesCentralDifferences) {
   for (double dt : {0.01, 0.1, 0.5}) {
     SquareMatrix<8> F;
     m.predict(sample_state(), u, dt, &F);
-    const auto num = test::central_jacobian<8, 8>([&](const X& x) { return m.predict(x, u, dt, nullptr); }, sample_state());
+    const auto num = ctxfuse::testing::central_jacobian<8, 8>([&](const X& x) { return m.predict(x, u, dt, nullptr); }, sample_state());
     EXPECT_LT((F - num).cwiseAbs().maxCoeff(), 1e-8) << "dt " << dt;
   }
 }
@@ -61,7 +61,7 @@ TEST(PlanarModel, MeasurementJacobiansMatchCentralDifferences) {
   Matrix<1, 8> Hr;
   const double r = range.predict(x, &Hr)(0);
   EXPECT_NEAR(r, std::sqrt(7.0 * 7.0 + 6.0 * 6.0 + 1.8 * 1.8), 1e-12);
-  auto nr = test::central_jacobian<1, 8>([&](const X& s) { return range.predict(s, nullptr); }, x);
+  auto nr = ctxfuse::testing::central_jacobian<1, 8>([&](const X& s) { return range.predict(s, nullptr); }, x);
   EXPECT_LT((Hr - nr).cwiseAbs().maxCoeff(), 1e-8);
 
   models::PlanarBodyVelocity bv;
@@ -70,13 +70,13 @@ TEST(PlanarModel, MeasurementJacobiansMatchCentralDifferences) {
   const double c = std::cos(0.6), s = std::sin(0.6);
   EXPECT_NEAR(zv(0), c * 1.5 + s * 0.7, 1e-15);
   EXPECT_NEAR(zv(1), -s * 1.5 + c * 0.7, 1e-15);
-  auto nv = test::central_jacobian<2, 8>([&](const X& st) { return bv.predict(st, nullptr); }, x);
+  auto nv = ctxfuse::testing::central_jacobian<2, 8>([&](const X& st) { return bv.predict(st, nullptr); }, x);
   EXPECT_LT((Hv - nv).cwiseAbs().maxCoeff(), 1e-8);
 
   models::PlanarPosition pos;
   Matrix<2, 8> Hp;
   pos.predict(x, &Hp);
-  auto np = test::central_jacobian<2, 8>([&](const X& st) { return pos.predict(st, nullptr); }, x);
+  auto np = ctxfuse::testing::central_jacobian<2, 8>([&](const X& st) { return pos.predict(st, nullptr); }, x);
   EXPECT_LT((Hp - np).cwiseAbs().maxCoeff(), 1e-9);
 }
 
@@ -99,7 +99,7 @@ TEST(InsRange, JacobianMatchesCentralDifferencesOnTheManifold) {
   range.lever_arm << 0.3, -0.1, 0.8;
   Matrix<1, 15> H;
   range.predict(x, &H);
-  auto num = test::central_jacobian<1, 15>(
+  auto num = ctxfuse::testing::central_jacobian<1, 15>(
       [&](const Vector<15>& dx) { return range.predict(ins.inject(x, dx), nullptr); }, Vector<15>::Zero());
   EXPECT_LT((H - num).cwiseAbs().maxCoeff(), 1e-8);
 }

@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <ctxfuse/io/hanyang_uwb.hpp>
-#include <ctxfuse/io/sim_logs.hpp>
+#include <ctxfuse/sim/logs.hpp>
 
 #include <cmath>
 #include <filesystem>
@@ -126,7 +126,7 @@ TEST_F(CutReaders, HanyangTrajectoryCutLineNeverDistorted) {
             0u);
 }
 
-const std::string kSimImu = std::string(ctxfuse::sim::kImuHeader) +
+const std::string kSimImu = std::string(ctxfuse::sim::csv::kImuHeader) +
                             "\n"
                             "0.01,0.001,-0.002,0.0125,0.125,-0.25,9.80665\n"
                             "0.02,0.0015,-0.0025,0.0175,0.1875,-0.3125,9.8125\n"
@@ -135,7 +135,7 @@ const std::string kSimImu = std::string(ctxfuse::sim::kImuHeader) +
 Rows sim_imu_rows(const std::filesystem::path& dir, const std::string& text) {
   write_text(dir / "imu.csv", text);
   Rows rows;
-  for (const auto& s : ctxfuse::io::sim_csv::read_imu(dir / "imu.csv"))
+  for (const auto& s : ctxfuse::sim::csv::read_imu(dir / "imu.csv"))
     rows.push_back({s.t, s.gyro.x(), s.gyro.y(), s.gyro.z(), s.accel.x(), s.accel.y(), s.accel.z()});
   return rows;
 }

@@ -12,6 +12,7 @@
 namespace {
 
 using namespace ctxfuse::io;
+using namespace ctxfuse::messages;
 using Hanyang = ctxfuse::test::TempFiles;
 
 const std::string kHeader = "%time,field.stamp,field.id,field.x,field.y,field.z,field.distanceFromTag,field.rssi,field.rssi_fp\n";

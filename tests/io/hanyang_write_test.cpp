@@ -17,7 +17,7 @@
 
 namespace fs = std::filesystem;
 using ctxfuse::io::HanyangReferencePose;
-using ctxfuse::io::UwbRange;
+using ctxfuse::messages::UwbRange;
 
 namespace {
 
@@ -49,7 +49,7 @@ std::string first_line(const fs::path& p) {
 
 TEST(HanyangWrite, RoundTrip) {
   const fs::path dir = scratch("hanyang_write");
-  const double nan = ctxfuse::io::kUnknown;
+  const double nan = ctxfuse::messages::kUnknown;
   // Anchor 12 before anchor 3 at one stamp: the reader orders by time, then id.
   const std::vector<UwbRange> in{range(1732085150.571773934, 3, {2.5775, -0.87, 1.97}, 6.210032333333333, -79.89, -80.65),
                                  range(1732085150.6, 12, {-1.0 / 3.0, 0.1, 0.5}, 0.0, nan, -81.5),

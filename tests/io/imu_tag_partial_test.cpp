@@ -21,6 +21,7 @@
 namespace {
 
 using namespace ctxfuse::io;
+using namespace ctxfuse::messages;
 using ImuPartial = ctxfuse::test::TempFiles;
 using Method = ImuTimeMapping::Method;
 

@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <ctxfuse/io/mag_csv.hpp>
-#include <ctxfuse/io/sim_logs.hpp>
+#include <ctxfuse/sim/logs.hpp>
 
 #include "temp_files.hpp"
 
@@ -27,7 +27,7 @@ TEST_F(MagCsv, TheSimulatorsFileReadsAsARecordings) {
   std::ofstream os(dir_ / "mag.csv");
   ctxfuse::sim::Drive d;
   d.mag = sim;
-  ctxfuse::io::sim_csv::write_log(os, d, "mag.csv");
+  ctxfuse::sim::csv::write_log(os, d, "mag.csv");
   os.close();
   const auto m = read_mag_csv(dir_ / "mag.csv");
   ASSERT_EQ(m.size(), 2u);

@@ -12,7 +12,8 @@
 namespace {
 
 using namespace ctxfuse::features;
-using namespace ctxfuse::features::nmea;
+using namespace ctxfuse::io;
+using namespace ctxfuse::io::nmea;
 
 // Appends "*hh" computed here by XOR (the test's own reference for the checksum).
 std::string with_checksum(const std::string& body) {

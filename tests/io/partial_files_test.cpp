@@ -26,6 +26,7 @@
 namespace {
 
 using namespace ctxfuse::io;
+using namespace ctxfuse::messages;
 using Partial = ctxfuse::test::TempFiles;
 
 std::string slurp(const std::filesystem::path& p) {
@@ -143,19 +144,19 @@ TEST_F(Partial, UwbStaticAtEveryByte) {
   text += "Distance Mean,10.095\nDistance Std,0.017\n";
   const auto dir = dir_ / "LOS" / "height_50.0cm";
   std::filesystem::create_directories(dir);
-  auto read = [&](const std::string& body, ctxfuse::features::UwbStaticReadStats& stats) {
+  auto read = [&](const std::string& body, ctxfuse::io::UwbStaticReadStats& stats) {
     std::ofstream(dir / "10m.csv", std::ios::binary) << body;
-    return ctxfuse::features::read_uwb_static_file(dir / "10m.csv", 10.0, false, 50.0, stats);
+    return ctxfuse::io::read_uwb_static_file(dir / "10m.csv", 10.0, false, 50.0, stats);
   };
-  ctxfuse::features::UwbStaticReadStats full_stats;
+  ctxfuse::io::UwbStaticReadStats full_stats;
   const auto full = read(text, full_stats);
   ASSERT_EQ(full.size(), 6u);
   const std::size_t data_end = text.find("Distance Mean");
   for (std::size_t cut = 0; cut <= text.size(); ++cut) {
     SCOPED_TRACE("cut at byte " + std::to_string(cut));
     const std::size_t lines = whole_lines(text, cut);
-    ctxfuse::features::UwbStaticReadStats stats;
-    std::vector<ctxfuse::features::UwbStaticRange> got;
+    ctxfuse::io::UwbStaticReadStats stats;
+    std::vector<ctxfuse::io::UwbStaticRange> got;
     try {
       got = read(text.substr(0, cut), stats);
     } catch (const ParseError& e) {
@@ -184,7 +185,7 @@ std::string sentence(const std::string& body) {
 }
 
 TEST_F(Partial, NmeaAtEveryByte) {
-  namespace nmea = ctxfuse::features::nmea;
+  namespace nmea = ctxfuse::io::nmea;
   std::string text;
   for (int e = 0; e < 3; ++e) {
     const std::string tod = "02141" + std::to_string(7 + e) + ".00";

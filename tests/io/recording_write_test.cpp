@@ -21,26 +21,26 @@ using RecordingWrite = test::TempFiles;
 TEST_F(RecordingWrite, ReadRecordingTakesTheWritersFolder) {
   const double t0 = 1752003260.0;
   // 30 s of a 150 Hz IMU whose clock runs 50 ppm slow, and 4 Hz fixes with velocity.
-  std::vector<io::ImuSample> imu;
+  std::vector<messages::ImuSample> imu;
   std::vector<std::int64_t> ticks;
   for (int i = 0; i < 4500; ++i) {
-    io::ImuSample s;
+    messages::ImuSample s;
     s.t = t0 + i / 150.0;
     s.gyro = Eigen::Vector3d(0.01, -0.02, 0.03 + 1e-5 * i);
     s.accel = Eigen::Vector3d(0.1, 0.2, -9.80665);
     imu.push_back(s);
     ticks.push_back(5000 + std::llround((s.t - t0) * (1.0 - 50e-6) * 1000.0));
   }
-  std::vector<io::GnssFix> fixes;
+  std::vector<messages::GnssFix> fixes;
   for (int i = 0; i < 120; ++i) {
-    io::GnssFix f;
+    messages::GnssFix f;
     f.t = t0 + 0.5 + 0.25 * i;
-    f.frame = io::PositionFrame::geodetic;
+    f.frame = messages::PositionFrame::geodetic;
     f.position = {40.0 + 1e-7 * i, -105.0, 1600.0};
     f.cov = Eigen::Vector3d(0.0004, 0.0004, 0.0009).asDiagonal();
     f.velocity = Eigen::Vector3d(1.2, 0.0, 0.0);
     f.velocity_cov = Eigen::Matrix3d::Identity() * 0.0025;
-    f.quality = io::FixQuality::fixed;
+    f.quality = messages::FixQuality::fixed;
     f.satellites_used = 14;
     fixes.push_back(f);
   }

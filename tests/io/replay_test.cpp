@@ -20,6 +20,8 @@ namespace {
 
 namespace io = ctxfuse::io;
 
+namespace messages = ctxfuse::messages;
+
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kOffset = 0.003;  // of the 4 Hz and 1 Hz stamps from the IMU grid
@@ -37,15 +39,15 @@ struct Event {
 struct Integrator {
   double x = 0.0;
   std::vector<Event> events;
-  void propagate(const io::ImuSample& u, double dt) {
+  void propagate(const messages::ImuSample& u, double dt) {
     x += u.gyro.x() * dt;
     events.push_back({'p', u.t, dt, x});
   }
-  void on(const io::ImuSample& u) { events.push_back({'i', u.t, u.gyro.x(), x}); }
-  void on(const io::GnssFix& m) { events.push_back({'g', m.t, m.position.x(), x}); }
-  void on(const io::SpeedSample& m) { events.push_back({'s', m.t, m.speed_mps, x}); }
-  void on(const io::MagSample& m) { events.push_back({'m', m.t, m.field_ut.x(), x}); }
-  void on(const io::UwbRange& m) { events.push_back({'u', m.t, m.range_m + 1000.0 * m.anchor_id, x}); }
+  void on(const messages::ImuSample& u) { events.push_back({'i', u.t, u.gyro.x(), x}); }
+  void on(const messages::GnssFix& m) { events.push_back({'g', m.t, m.position.x(), x}); }
+  void on(const messages::SpeedSample& m) { events.push_back({'s', m.t, m.speed_mps, x}); }
+  void on(const messages::MagSample& m) { events.push_back({'m', m.t, m.field_ut.x(), x}); }
+  void on(const messages::UwbRange& m) { events.push_back({'u', m.t, m.range_m + 1000.0 * m.anchor_id, x}); }
 
   std::vector<Event> calls_except_propagate() const {
     std::vector<Event> out;
@@ -67,21 +69,21 @@ std::vector<M> stream(int first, int last, Set set) {
   return v;
 }
 // Rates that change from sample to sample, so that holding the wrong sample shows.
-std::vector<io::ImuSample> imu_100hz(int last = 300, int first = 0) {
-  return stream<io::ImuSample>(first, last, [](auto& s, int k) { s.t = k / 100.0; s.gyro.x() = 1.0 + 0.5 * (k % 7); });
+std::vector<messages::ImuSample> imu_100hz(int last = 300, int first = 0) {
+  return stream<messages::ImuSample>(first, last, [](auto& s, int k) { s.t = k / 100.0; s.gyro.x() = 1.0 + 0.5 * (k % 7); });
 }
-std::vector<io::GnssFix> fixes_10hz(int last = 30) {
-  return stream<io::GnssFix>(0, last, [](auto& f, int k) { f.t = k / 10.0; f.position.x() = k; });
+std::vector<messages::GnssFix> fixes_10hz(int last = 30) {
+  return stream<messages::GnssFix>(0, last, [](auto& f, int k) { f.t = k / 10.0; f.position.x() = k; });
 }
-std::vector<io::SpeedSample> speed_4hz(int last = 11) {
-  return stream<io::SpeedSample>(0, last, [](auto& s, int k) { s.t = kOffset + k / 4.0; s.speed_mps = k; });
+std::vector<messages::SpeedSample> speed_4hz(int last = 11) {
+  return stream<messages::SpeedSample>(0, last, [](auto& s, int k) { s.t = kOffset + k / 4.0; s.speed_mps = k; });
 }
-std::vector<io::MagSample> mag_1hz(int last = 2) {
-  return stream<io::MagSample>(0, last, [](auto& m, int k) { m.t = kOffset + k; m.field_ut.x() = k; });
+std::vector<messages::MagSample> mag_1hz(int last = 2) {
+  return stream<messages::MagSample>(0, last, [](auto& m, int k) { m.t = kOffset + k; m.field_ut.x() = k; });
 }
 // Three anchors per stamp (anchor 1, 2, 3 for k % 3 = 0, 1, 2), 5 Hz, 5 ms after the IMU grid.
-std::vector<io::UwbRange> ranges_5hz(int last = 14) {
-  return stream<io::UwbRange>(0, 3 * last + 2, [](auto& r, int k) {
+std::vector<messages::UwbRange> ranges_5hz(int last = 14) {
+  return stream<messages::UwbRange>(0, 3 * last + 2, [](auto& r, int k) {
     r.t = 0.005 + (k / 3) / 5.0;
     r.anchor_id = 1 + k % 3;
     r.range_m = 10.0 + k / 3;
@@ -89,7 +91,7 @@ std::vector<io::UwbRange> ranges_5hz(int last = 14) {
 }
 
 // x at time t by hand: each sample's rate held from its stamp to the next sample's, summed.
-double integral_to(const std::vector<io::ImuSample>& imu, double t) {
+double integral_to(const std::vector<messages::ImuSample>& imu, double t) {
   double x = 0.0;
   for (std::size_t k = 0; k + 1 < imu.size() && imu[k].t < t; ++k)
     x += imu[k].gyro.x() * (std::min(t, imu[k + 1].t) - imu[k].t);
@@ -239,12 +241,12 @@ TEST(Replay, BadStampsAreCountedPerStreamDroppedAndChangeNothing) {
 
   // Every bad message carries a value that would show if it were used.
   auto bad_imu = imu;
-  const auto imu_at = [](double t) { return io::ImuSample{t, Eigen::Vector3d(1e6, 0.0, 0.0), {}, false}; };
+  const auto imu_at = [](double t) { return messages::ImuSample{t, Eigen::Vector3d(1e6, 0.0, 0.0), {}, false}; };
   bad_imu.insert(bad_imu.begin() + 151, imu_at(1.5));   // repeated (after the sample at 1.5)
   bad_imu.insert(bad_imu.begin() + 101, imu_at(0.95));  // backwards (after 1.0)
   bad_imu.insert(bad_imu.begin() + 51, imu_at(kNaN));   // non-finite
   auto bad_fixes = fixes;
-  const auto fix_at = [](double t) { io::GnssFix f; f.t = t; f.position.x() = 999.0; return f; };
+  const auto fix_at = [](double t) { messages::GnssFix f; f.t = t; f.position.x() = 999.0; return f; };
   bad_fixes.insert(bad_fixes.begin() + 21, fix_at(kInf));
   bad_fixes.insert(bad_fixes.begin() + 16, fix_at(-kInf));
   bad_fixes.insert(bad_fixes.begin() + 11, fix_at(1.0));   // repeated, other values
@@ -279,7 +281,7 @@ TEST(Replay, BadStampsAreCountedPerStreamDroppedAndChangeNothing) {
   EXPECT_EQ(r.propagations, clean_report.propagations);
 
   // Seventy anchors on one stamp: a duplicate of the last one is still seen.
-  auto many = stream<io::UwbRange>(1, 70, [](auto& m, int k) { m.t = 0.5; m.anchor_id = k; });
+  auto many = stream<messages::UwbRange>(1, 70, [](auto& m, int k) { m.t = 0.5; m.anchor_id = k; });
   many.push_back(many.back());
   Integrator crowded;
   EXPECT_EQ(counts(io::replay(crowded, sp(imu), sp(many)).streams[0]), (Counts{70, 0, 0, 0, 1, 0, 0}));
@@ -339,10 +341,10 @@ TEST(Replay, TamperHookDropsDelaysAndCorruptsThroughTheSameChecks) {
 
   // Drop: every odd fix, as if they had never been recorded.
   auto even_fixes = fixes;
-  std::erase_if(even_fixes, [](const io::GnssFix& f) { return static_cast<int>(f.position.x()) % 2 == 1; });
+  std::erase_if(even_fixes, [](const messages::GnssFix& f) { return static_cast<int>(f.position.x()) % 2 == 1; });
   Integrator filtered, dropped;
   (void)io::replay(filtered, sp(imu), sp(even_fixes), sp(speed), sp(mag));
-  auto drop = Overload{pass, [](io::GnssFix& f) { return static_cast<int>(f.position.x()) % 2 == 0; }};
+  auto drop = Overload{pass, [](messages::GnssFix& f) { return static_cast<int>(f.position.x()) % 2 == 0; }};
   auto r = io::replay_tampered(dropped, drop, sp(imu), sp(fixes), sp(speed), sp(mag));
   EXPECT_EQ(dropped.events, filtered.events);
   EXPECT_EQ(counts(r.streams[0]), (Counts{16, 0, 0, 0, 0, 0, 15}));
@@ -353,7 +355,7 @@ TEST(Replay, TamperHookDropsDelaysAndCorruptsThroughTheSameChecks) {
   for (auto& s : late_speed) s.t += 0.05;
   Integrator shifted, delayed;
   (void)io::replay(shifted, sp(imu), sp(fixes), sp(late_speed), sp(mag));
-  auto delay = Overload{pass, [](io::SpeedSample& s) { s.t += 0.05; return true; }};
+  auto delay = Overload{pass, [](messages::SpeedSample& s) { s.t += 0.05; return true; }};
   r = io::replay_tampered(delayed, delay, sp(imu), sp(fixes), sp(speed), sp(mag));
   EXPECT_EQ(delayed.events, shifted.events);
   EXPECT_EQ(r.dropped(), 0u);
@@ -370,8 +372,8 @@ TEST(Replay, TamperHookDropsDelaysAndCorruptsThroughTheSameChecks) {
   auto biased = imu;
   for (auto& s : biased) s.gyro.x() += 0.25;
   Integrator corrupted;
-  auto corrupt = Overload{pass, [](io::ImuSample& s) { s.gyro.x() += 0.25; return true; },
-                          [](io::MagSample& m) { m.field_ut.x() = -m.field_ut.x(); return true; }};
+  auto corrupt = Overload{pass, [](messages::ImuSample& s) { s.gyro.x() += 0.25; return true; },
+                          [](messages::MagSample& m) { m.field_ut.x() = -m.field_ut.x(); return true; }};
   r = io::replay_tampered(corrupted, corrupt, sp(imu), sp(fixes), sp(speed), sp(mag));
   EXPECT_EQ(r.dropped(), 0u);
   for (const auto& e : corrupted.events) {
@@ -385,7 +387,7 @@ TEST(Replay, TamperHookDropsDelaysAndCorruptsThroughTheSameChecks) {
 
   // A stamp the hook breaks is caught by the checks, as a recorded one would be.
   Integrator broken;
-  auto nan_stamp = Overload{pass, [](io::GnssFix& f) { f.t = f.position.x() == 3.0 ? kNaN : f.t; return true; }};
+  auto nan_stamp = Overload{pass, [](messages::GnssFix& f) { f.t = f.position.x() == 3.0 ? kNaN : f.t; return true; }};
   const auto rb = io::replay_tampered(broken, nan_stamp, sp(imu), sp(fixes));
   EXPECT_EQ(counts(rb.streams[0]), (Counts{30, 1, 0, 0, 0, 0, 0}));  // non-finite, not tampered
 }
@@ -395,10 +397,10 @@ namespace {
 struct MeasurementsOnly {
   int propagations = 0;
   std::vector<Event> events;
-  void propagate(const io::ImuSample&, double) { ++propagations; }
-  void on(const io::GnssFix& m) { events.push_back({'g', m.t, m.position.x(), 0.0}); }
-  void on(const io::SpeedSample& m) { events.push_back({'s', m.t, m.speed_mps, 0.0}); }
-  void on(const io::MagSample& m) { events.push_back({'m', m.t, m.field_ut.x(), 0.0}); }
+  void propagate(const messages::ImuSample&, double) { ++propagations; }
+  void on(const messages::GnssFix& m) { events.push_back({'g', m.t, m.position.x(), 0.0}); }
+  void on(const messages::SpeedSample& m) { events.push_back({'s', m.t, m.speed_mps, 0.0}); }
+  void on(const messages::MagSample& m) { events.push_back({'m', m.t, m.field_ut.x(), 0.0}); }
 };
 }  // namespace
 
@@ -407,7 +409,7 @@ TEST(Replay, WithoutImuMeasurementsComeInOrderAndNothingIsPropagated) {
   const auto speed = speed_4hz();
   const auto mag = mag_1hz();
   MeasurementsOnly h;
-  const auto r = io::replay(h, std::span<const io::ImuSample>{}, sp(fixes), sp(speed), sp(mag));
+  const auto r = io::replay(h, std::span<const messages::ImuSample>{}, sp(fixes), sp(speed), sp(mag));
   Expected want;
   for (const auto& f : fixes) want.add(1, 'g', f.t, f.position.x());
   for (const auto& s : speed) want.add(2, 's', s.t, s.speed_mps);
@@ -433,17 +435,17 @@ namespace {
 // to the sum of the increments, and a measurement inside an interval sees that interval's
 // rate times the time elapsed in it.
 TEST(Replay, IncrementSamplesActOverTheIntervalThatEndsAtTheirStamp) {
-  std::vector<io::ImuSample> imu;
+  std::vector<messages::ImuSample> imu;
   const std::array<double, 5> stamps{0.0, 0.01, 0.02, 0.035, 0.05};  // irregular
   const std::array<double, 5> increments{9.0, 0.02, -0.01, 0.03, 0.045};  // the first is never used
   for (std::size_t k = 0; k < stamps.size(); ++k) {
-    io::ImuSample s;
+    messages::ImuSample s;
     s.t = stamps[k];
     s.gyro.x() = increments[k];
     s.increments = true;
     imu.push_back(s);
   }
-  std::vector<io::GnssFix> fixes(1);
+  std::vector<messages::GnssFix> fixes(1);
   fixes[0].t = 0.03;  // 2/3 of the way through (0.02, 0.035]
   Integrator h;
   const auto report = io::replay(h, sp(imu), sp(fixes));

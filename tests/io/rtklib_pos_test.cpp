@@ -12,6 +12,7 @@
 namespace {
 
 using namespace ctxfuse::io;
+using namespace ctxfuse::messages;
 using Pos = ctxfuse::test::TempFiles;
 
 const std::string kFullHeader =

@@ -18,6 +18,7 @@
 namespace {
 
 using namespace ctxfuse::io;
+using namespace ctxfuse::messages;
 using PosWrite = ctxfuse::test::TempFiles;
 
 double to_decimals(double v, int d) { return std::round(v * std::pow(10.0, d)) / std::pow(10.0, d); }

@@ -1,9 +1,9 @@
-// The simulator's CSV logs (io/sim_logs.hpp): a drive written and read back is bit for bit the
+// The simulator's CSV logs (sim/logs.hpp): a drive written and read back is bit for bit the
 // drive (the sensor streams equal sim::sensor_log, the truth and labels the drive's own), and
 // malformed files give io::ParseError naming file:line:column and the column, never a crash.
 #include <gtest/gtest.h>
 
-#include <ctxfuse/io/sim_logs.hpp>
+#include <ctxfuse/sim/logs.hpp>
 #include <ctxfuse/sim/streams.hpp>
 
 #include <bit>
@@ -21,8 +21,10 @@
 namespace {
 
 namespace io = ctxfuse::io;
+
+namespace messages = ctxfuse::messages;
 namespace sim = ctxfuse::sim;
-namespace csv = ctxfuse::io::sim_csv;
+namespace csv = ctxfuse::sim::csv;
 using SimLogs = ctxfuse::test::TempFiles;
 
 const sim::Drive& drive_seed_1() {
@@ -48,7 +50,7 @@ bool same(const Eigen::MatrixBase<A>& a, const Eigen::MatrixBase<B>& b) {
 }
 #define EXPECT_SAME(a, b, k) EXPECT_TRUE(same(a, b)) << #a << " of message " << (k) << ": " << (a) << " vs " << (b)
 
-void expect_same(const io::SensorLog& got, const io::SensorLog& want) {
+void expect_same(const messages::SensorLog& got, const messages::SensorLog& want) {
   ASSERT_EQ(got.imu.size(), want.imu.size());
   for (std::size_t k = 0; k < want.imu.size(); ++k) {
     EXPECT_SAME(got.imu[k].t, want.imu[k].t, k);
@@ -145,9 +147,9 @@ std::vector<io::ParseError> errors_of_both_readers(const std::filesystem::path& 
   for (const bool rows : {true, false}) {
     try {
       if (rows)
-        (void)sim::read_drive_logs(dir);
+        (void)sim::csv::read_drive_logs(dir);
       else
-        (void)io::read_sim_logs(dir);
+        (void)sim::read_sim_logs(dir);
       ADD_FAILURE() << (rows ? "read_drive_logs" : "read_sim_logs") << " found no error";
     } catch (const io::ParseError& e) {
       out.push_back(e);
@@ -156,7 +158,7 @@ std::vector<io::ParseError> errors_of_both_readers(const std::filesystem::path& 
   return out;
 }
 // The former name of the error, for callers of sim/log_io.hpp.
-static_assert(std::is_same_v<sim::LogError, io::ParseError>);
+static_assert(std::is_same_v<io::ParseError, io::ParseError>);
 
 auto imu_reader = [](const std::filesystem::path& p) { return csv::read_imu(p); };
 
@@ -165,8 +167,8 @@ auto imu_reader = [](const std::filesystem::path& p) { return csv::read_imu(p); 
 // With 10 significant digits (the former writer) none of this would hold.
 TEST_F(SimLogs, DriveWrittenAndReadBackIsBitForBitTheDrive) {
   const auto& d = drive_seed_1();
-  io::write_drive_logs(d, dir_);
-  const auto logs = io::read_sim_logs(dir_);
+  sim::write_drive_logs(d, dir_);
+  const auto logs = sim::read_sim_logs(dir_);
   const auto want = sim::sensor_log(d);
   ASSERT_GT(want.uwb.size(), 100u);
   ASSERT_GT(want.gnss.size(), 10u);
@@ -193,7 +195,7 @@ TEST_F(SimLogs, DriveWrittenAndReadBackIsBitForBitTheDrive) {
   EXPECT_TRUE(logs.truth.fixes.empty());
 
   // The former reader's view, row by row, is exact too.
-  const auto rows = sim::read_drive_logs(dir_);
+  const auto rows = sim::csv::read_drive_logs(dir_);
   ASSERT_EQ(rows.gnss.size(), d.gnss.size());
   for (std::size_t k = 0; k < d.gnss.size(); ++k) {
     EXPECT_EQ(rows.gnss[k].has_fix, d.gnss[k].has_fix);
@@ -216,8 +218,8 @@ TEST_F(SimLogs, NumbersAreWrittenInTheirShortestRoundTripForm) {
   EXPECT_EQ(os.str(), std::string(csv::kImuHeader) +
                           "\n0.1,0.3333333333333333,-0,1e-300,1.0000000000000002,123456789.125,-9.81"
                           "\n0.2,0,0.6666666666666666,1e+11,0,0,0\n");
-  io::write_drive_logs(d, dir_);
-  const auto back = io::read_sim_logs(dir_);
+  sim::write_drive_logs(d, dir_);
+  const auto back = sim::read_sim_logs(dir_);
   expect_same(back.sensors, sim::sensor_log(d));
   EXPECT_TRUE(std::signbit(back.sensors.imu[0].gyro.y()));
 }
@@ -299,13 +301,13 @@ TEST_F(SimLogs, MalformedRowsNameFileLineAndColumn) {
 
 TEST_F(SimLogs, DirectoryLevelErrorsNameTheFile) {
   const auto& d = drive_seed_1();
-  io::write_drive_logs(d, dir_);
+  sim::write_drive_logs(d, dir_);
   std::filesystem::remove(dir_ / "mag.csv");
   for (const auto& e : errors_of_both_readers(dir_)) {
     EXPECT_NE(e.file().find("mag.csv"), std::string::npos);
     WHAT_HAS(e, "cannot open");
   }
-  io::write_drive_logs(d, dir_);
+  sim::write_drive_logs(d, dir_);
   // Drop the first satellite row: gnss.csv and sats.csv disagree.
   auto rewrite_sats = [&](auto edit) {
     std::ifstream in(dir_ / "sats.csv");
@@ -325,7 +327,7 @@ TEST_F(SimLogs, DirectoryLevelErrorsNameTheFile) {
     WHAT_HAS(e, "satellites");
   }
   // A satellite row after the last epoch.
-  io::write_drive_logs(d, dir_);
+  sim::write_drive_logs(d, dir_);
   rewrite_sats([](std::string& text) { text += "12345.5,101,45,10,40,1\n"; });
   for (const auto& e : errors_of_both_readers(dir_)) WHAT_HAS(e, "time 12345.5 is not an epoch of gnss.csv");
 }

@@ -10,7 +10,7 @@
 namespace {
 
 namespace fs = std::filesystem;
-using namespace ctxfuse::features;
+using namespace ctxfuse::io;
 
 const char* kHeader =
     "timestamp,Transmission #,Reception #,maxNoise,Distance,Channel,FirstPathAmp1,FirstPathAmp2,FirstPathAmp3,"

@@ -7,11 +7,11 @@
 #include <cmath>
 
 #include "ctxfuse/models/averaged_range.hpp"
-#include "support/numerical_jacobian.hpp"
+#include "ctxfuse/testing/jacobians.hpp"
 
 namespace {
 using namespace ctxfuse;
-using test::central_jacobian;
+using ctxfuse::testing::central_jacobian;
 
 using L = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>, StateBlock<"b", 3>>;
 

@@ -15,7 +15,7 @@
 #include <numbers>
 #include <vector>
 
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/calibrated_ekf.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/estimators.hpp"
 #include "ctxfuse/sim/random.hpp"
@@ -58,12 +58,12 @@ struct Loop {
 
 /// Epochs of 4 ranges (one per anchor, 2 ms apart) every 0.1 s for `seconds`: each report is
 /// the mean of the last `samples` raw ranges (one period apart) plus the anchor's bias.
-std::vector<std::array<io::UwbRange, 4>> epochs(const Loop& loop, double seconds, int samples, const std::array<double, 4>& bias,
+std::vector<std::array<messages::UwbRange, 4>> epochs(const Loop& loop, double seconds, int samples, const std::array<double, 4>& bias,
                                                std::uint64_t seed) {
   sim::Rng rng(seed, sim::Stream::uwb);
-  std::vector<std::array<io::UwbRange, 4>> out;
+  std::vector<std::array<messages::UwbRange, 4>> out;
   for (int k = 1; k * kPeriod <= seconds; ++k) {
-    std::array<io::UwbRange, 4> e;
+    std::array<messages::UwbRange, 4> e;
     for (std::size_t a = 0; a < 4; ++a) {
       const double t = k * kPeriod + 0.002 * static_cast<double>(a);
       double sum = 0.0;
@@ -89,7 +89,7 @@ struct Errors {
 /// Runs the estimator from the true start over the epochs, every range attached; errors over
 /// the epochs after `settle` seconds (the newest state's, and the lagged output's if any).
 template <class E>
-Errors track(E& est, const Loop& loop, const std::vector<std::array<io::UwbRange, 4>>& ep, double settle) {
+Errors track(E& est, const Loop& loop, const std::vector<std::array<messages::UwbRange, 4>>& ep, double settle) {
   Errors out;
   const double t0 = ep.front()[0].t;
   EXPECT_TRUE(est.start(t0, loop.at(t0), Eigen::Matrix2d::Identity() * 0.01).accepted());
@@ -197,7 +197,7 @@ TEST(CalibratedEkf, ARestartKeepsTheBiasesAndRefusalsChangeNothing) {
   track(est, loop, ep, 0.0);
   const Gaussian<12> before = est.belief();
   // Refused: a NaN range, a negative one, one beyond reach, a prediction back in time.
-  io::UwbRange r = ep.back()[0];
+  messages::UwbRange r = ep.back()[0];
   for (double bad : {std::nan(""), -1.0, 1e6}) {
     r.range_m = bad;
     EXPECT_EQ(est.update(r).outcome, Outcome::invalid_input) << bad;

@@ -89,7 +89,7 @@ TEST(NlosUwbLabels, ResidualAboveThreeSigmaIsNlos) {
   // Reference moving along x at z = 0; tag 1 m above it; anchor at (0, 0, 1): distance = x.
   const std::vector<HanyangReferencePose> ref{pose(0, 10, 0, 0), pose(2, 30, 0, 0)};
   const nu::Settings s;  // sigma 0.1 m, 3 sigma
-  ctxfuse::io::UwbRange r;
+  ctxfuse::messages::UwbRange r;
   r.anchor_position = {0, 0, 1};
   r.t = 1.0;  // reference at x = 20
   r.range_m = 20.31;

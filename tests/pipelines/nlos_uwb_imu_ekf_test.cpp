@@ -18,8 +18,8 @@ namespace nu = pipelines::nlos_uwb;
 using L = models::PlanarLayout;
 
 // A sample every 10 ms from t = 0: turning and accelerating a little, different every time.
-io::ImuSample sample(int k) {
-  io::ImuSample s;
+messages::ImuSample sample(int k) {
+  messages::ImuSample s;
   s.t = 0.01 * k;
   s.gyro << 0.0, 0.0, 0.05 * std::sin(0.3 * k);
   s.accel << 0.4 * std::cos(0.2 * k), 0.1 * std::sin(0.5 * k), 9.81;
@@ -68,7 +68,7 @@ TEST(NlosImuEkf, EpochRangesAreAppliedEachAtItsOwnTimeWithTheScalarUpdate) {
   const nu::ImuFusionSettings imu;
   nu::ImuRangeEkf<NoGate> est(s, imu);
   const double t0 = started_with_imu(est, 50);
-  std::array<io::UwbRange, 3> epoch{};
+  std::array<messages::UwbRange, 3> epoch{};
   const double times[3] = {t0 + 0.104, t0 + 0.131, t0 + 0.162};
   const Eigen::Vector3d anchors[3] = {{0.0, 20.0, 2.5}, {30.0, -10.0, 2.0}, {-5.0, -15.0, 3.0}};
   for (int a = 0; a < 3; ++a) {
@@ -118,7 +118,7 @@ TEST(NlosImuEkf, NoImuOrATimeBeforeTheClockIsRefusedAndChangesNothing) {
   EXPECT_EQ(est.predict_to(t0 - 0.1).problem, Problem::out_of_order_time);
   EXPECT_EQ(est.predict_to(std::nan("")).problem, Problem::non_finite_dt);
   EXPECT_EQ(est.time(), t0);
-  io::UwbRange bad;
+  messages::UwbRange bad;
   bad.t = t0;
   bad.anchor_position = Eigen::Vector3d(0.0, 20.0, 2.5);
   bad.range_m = -1.0;
@@ -136,7 +136,7 @@ TEST(NlosImuEkf, TheGateRefusesAGrossRangeAndKeepsTheBelief) {
   ASSERT_TRUE(est.started());
   const Gaussian<L::size> before = est.belief();
   const Eigen::Vector2d p = est.position();
-  io::UwbRange r;
+  messages::UwbRange r;
   r.t = est.time();
   r.anchor_position = Eigen::Vector3d(p.x(), p.y() + 20.0, s.tag_height_m);
   r.range_m = 70.0;  // 50 m long

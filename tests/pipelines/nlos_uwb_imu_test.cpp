@@ -112,7 +112,7 @@ TEST(NlosImuSmoother, EpochWithoutImuOrWithABrokenIntervalIsRefusedAndChangesNot
   ASSERT_TRUE(est.started());
   const double t0 = est.time();
   const Eigen::Vector2d p0 = est.position();
-  std::array<io::UwbRange, 3> epoch{};
+  std::array<messages::UwbRange, 3> epoch{};
   for (int a = 0; a < 3; ++a) {
     epoch[static_cast<std::size_t>(a)].t = t0 + 0.1;
     epoch[static_cast<std::size_t>(a)].anchor_id = a;
@@ -126,13 +126,13 @@ TEST(NlosImuSmoother, EpochWithoutImuOrWithABrokenIntervalIsRefusedAndChangesNot
   EXPECT_EQ(est.time(), t0);
   EXPECT_EQ(est.position(), p0);
   // Only absurd samples (a 50 rad/s yaw rate): refused as pieces, so still nothing to use.
-  io::ImuSample spin;
+  messages::ImuSample spin;
   spin.gyro.z() = 50.0;
   for (int k = 0; k < 10; ++k) est.add_imu(t0 + 0.01 * k, 0.01, spin);
   EXPECT_EQ(est.apply_epoch(epoch, attach, st).problem, Problem::non_finite_input);
   EXPECT_EQ(est.time(), t0);
   // Good samples then make the same epoch a step.
-  io::ImuSample rest;
+  messages::ImuSample rest;
   rest.accel.z() = 9.81;
   for (int k = 0; k < 10; ++k) est.add_imu(t0 + 0.01 * k, 0.01, rest);
   EXPECT_TRUE(est.apply_epoch(epoch, attach, st).accepted());

@@ -88,7 +88,7 @@ TEST(NlosUwbClassifier, ConsistencyAloneFollowsEquationSix) {
   // 0.7 (0.2 < e <= 0.3), 0.9 (e > 0.3).
   const nu::Settings s;
   nu::NlosClassifier c(s);
-  ctxfuse::io::UwbRange r;
+  ctxfuse::messages::UwbRange r;
   r.anchor_id = 3;
   r.range_m = 10.0;
   r.t = 1.0;
@@ -119,7 +119,7 @@ TEST(NlosUwbClassifier, DsFusesTheSvmAndConsistencyAsEquationEight) {
   const nu::Settings s;
   const nu::NlosSvm svm = nu::train_nlos_svm(rows, s);
   nu::NlosClassifier c(s, svm);
-  ctxfuse::io::UwbRange r;
+  ctxfuse::messages::UwbRange r;
   r.anchor_id = 9;
   r.range_m = 20.0;
   r.t = 5.0;
@@ -188,8 +188,8 @@ TEST(NlosUwbClassifier, GammaByCrossValidationFollowsAFineBoundary) {
 
 namespace {
 
-ctxfuse::io::UwbRange range_at(double t, int anchor, double range) {
-  ctxfuse::io::UwbRange r;
+ctxfuse::messages::UwbRange range_at(double t, int anchor, double range) {
+  ctxfuse::messages::UwbRange r;
   r.t = t;
   r.anchor_id = anchor;
   r.anchor_position = {2.5, 0.9 * anchor, 1.0};
@@ -224,7 +224,7 @@ TEST(NlosUwbEstimator, SmootherRefusesAnEpochAtItsOwnTimeUnchanged) {
   const nu::Settings s;
   nu::RangeSmoother<> sm(s);
   ASSERT_TRUE(sm.start(10.0, Eigen::Vector2d(20, 3), Eigen::Matrix2d::Identity()).accepted());
-  const std::vector<ctxfuse::io::UwbRange> epoch{range_at(10.0, 3, 17.5)};
+  const std::vector<ctxfuse::messages::UwbRange> epoch{range_at(10.0, 3, 17.5)};
   std::array<bool, 1> attach{true};
   std::array<ctxfuse::Status, 1> st{};
   const auto x = sm.smoother().newest();
@@ -237,7 +237,7 @@ TEST(NlosUwbEstimator, SmootherRefusesAnEpochAtItsOwnTimeUnchanged) {
   EXPECT_EQ(sm.apply_epoch(epoch, attach, st).outcome, ctxfuse::Outcome::invalid_input);
   EXPECT_EQ(sm.smoother().newest(), x);
   // A gross range at a later time: gated before the solve; the step itself is accepted.
-  const std::vector<ctxfuse::io::UwbRange> later{range_at(10.1, 3, 40.0)};
+  const std::vector<ctxfuse::messages::UwbRange> later{range_at(10.1, 3, 40.0)};
   EXPECT_TRUE(sm.apply_epoch(later, attach, st).accepted());
   EXPECT_EQ(st[0].outcome, ctxfuse::Outcome::gated);
   EXPECT_DOUBLE_EQ(sm.time(), 10.1);
@@ -254,10 +254,10 @@ void start_epoch_is_the_fix() {
   const std::array<Eigen::Vector2d, 4> anchors{Eigen::Vector2d(0, 0), Eigen::Vector2d(30, 0), Eigen::Vector2d(30, 30),
                                                Eigen::Vector2d(0, 30)};
   const Eigen::Vector2d p(12.0, 17.0);
-  std::vector<ctxfuse::io::UwbRange> stream;
+  std::vector<ctxfuse::messages::UwbRange> stream;
   for (int k = 0; k < 2; ++k)
     for (int a = 0; a < 4; ++a) {
-      ctxfuse::io::UwbRange r;
+      ctxfuse::messages::UwbRange r;
       r.t = 5.0 + 0.1 * k + 0.001 * a;
       r.anchor_id = a;
       r.anchor_position << anchors[static_cast<std::size_t>(a)], s.tag_height_m;  // tag and anchors level
@@ -285,7 +285,7 @@ TEST(NlosUwbEpochs, OneRangePerAnchorWithinTheWindow) {
   // Anchors 3, 5, 9, 12 within 3 ms; anchor 3 again 100 ms later; then 5 twice 10 ms apart (a
   // repeated anchor closes the epoch even inside the window).
   std::vector<std::vector<int>> epochs;
-  auto process = [&](std::span<const ctxfuse::io::UwbRange> e) {
+  auto process = [&](std::span<const ctxfuse::messages::UwbRange> e) {
     epochs.emplace_back();
     for (const auto& r : e) epochs.back().push_back(r.anchor_id);
   };

@@ -194,7 +194,7 @@ TEST(NlosUwbRealDataDiagnostics, AnchorBiasesAndAveragingEachHelp) {
     CTXFUSE_REQUIRE_DATA(dir, std::string("uwb-outdoor-hanyang/Dynamic_measurements/") + kCases[c].dir);
     const auto ranges = ctxfuse::io::read_hanyang_uwb(dir).uwb_ranges();
     const auto ref = ctxfuse::io::read_hanyang_reference(dir);
-    const std::span<const ctxfuse::io::UwbRange> rs(ranges);
+    const std::span<const ctxfuse::messages::UwbRange> rs(ranges);
     for (int v = 0; v < 4; ++v) {
       nu::Settings s;
       s.anchor_bias_sigma_m = (v == 1 || v == 3) ? s.anchor_bias_sigma_m : 0.0;
@@ -220,7 +220,7 @@ TEST(NlosUwbRealDataDiagnostics, TimeOffsetGeometryAndProcessNoise) {
   const nu::Settings s;
   const auto ranges = ctxfuse::io::read_hanyang_uwb(dir).uwb_ranges();
   const auto ref = ctxfuse::io::read_hanyang_reference(dir);
-  const std::span<const ctxfuse::io::UwbRange> rs(ranges);
+  const std::span<const ctxfuse::messages::UwbRange> rs(ranges);
   const auto span = ev::trajectory_a_span();
   const auto ekf = nu::run(rs, nu::RangeEkf<>(s), nu::NoNlosHandling{}, nu::NlosClassifier(s), s);
   const auto ls = nu::least_squares_track(rs, s);

@@ -28,7 +28,7 @@ namespace ri = pipelines::region_imm;
 /// A simulated drive as the pipeline sees it (streams) and as scoring sees it (truth).
 struct Case {
   sim::Drive drive;
-  io::SensorLog log;
+  messages::SensorLog log;
   ri::FeatureSeries features;
   std::vector<int> true_labels;  // region per receiver epoch
 };
@@ -163,7 +163,7 @@ TEST(RegionPipeline, StaticWeightFederatedFilterCombinesTheLocalsWithFixedWeight
   a.heading = 0.4;
   const auto b0 = ri::initial_belief(a, s);
   ri::FederatedCore fixed{&s, true}, informed{&s, false};
-  io::GnssFix fix;
+  messages::GnssFix fix;
   fix.t = 1.0;
   fix.position = Eigen::Vector3d(6.0, -1.0, 0.0);
   fix.cov = Eigen::Matrix3d::Identity();
@@ -257,7 +257,7 @@ TEST(RegionPipeline, FiltersStartFromTheLogsOwnFixes) {
   ASSERT_TRUE(r.alignment.has_value());
   const auto& a = *r.alignment;
   const auto& fixes = drive().log.gnss;
-  const auto fix = std::find_if(fixes.begin(), fixes.end(), [&](const io::GnssFix& f) { return f.t == a.t; });
+  const auto fix = std::find_if(fixes.begin(), fixes.end(), [&](const messages::GnssFix& f) { return f.t == a.t; });
   ASSERT_NE(fix, fixes.end()) << "the start is not a fix";
   EXPECT_EQ(a.position, Eigen::Vector2d(fix->position.head<2>()));
   EXPECT_LE(std::sqrt(a.heading_var), s.align_max_heading_sigma_deg * std::numbers::pi / 180.0 + 1e-12);
@@ -277,13 +277,13 @@ TEST(RegionPipeline, FiltersStartFromTheLogsOwnFixes) {
 // multilaterations instead: inside the garage, at a stamp time, with a heading within 3 sigma
 // of the true one.
 TEST(RegionPipeline, WithoutGnssTheFiltersAlignOnUwbSnapshots) {
-  io::SensorLog no_gnss = drive().log;
+  messages::SensorLog no_gnss = drive().log;
   no_gnss.gnss.clear();
   const auto r = ri::run(no_gnss, ri::Estimator::idr, ri::Settings{});
   ASSERT_TRUE(r.alignment.has_value());
   const auto& a = *r.alignment;
   const auto& ranges = drive().log.uwb;
-  EXPECT_TRUE(std::any_of(ranges.begin(), ranges.end(), [&](const io::UwbRange& u) { return u.t == a.t; })) << "not a UWB stamp";
+  EXPECT_TRUE(std::any_of(ranges.begin(), ranges.end(), [&](const messages::UwbRange& u) { return u.t == a.t; })) << "not a UWB stamp";
   const auto k = static_cast<std::size_t>(std::lround(a.t * drive().drive.config.imu.rate_hz));
   const auto& truth = drive().drive.truth[k];
   EXPECT_LT((a.position - truth.position.head<2>()).norm(), 1.0);
@@ -309,7 +309,7 @@ TEST(RegionPipeline, KnownMotionStartsAtTheFirstFix) {
 // Bad time stamps in the log are dropped and counted by the replay, and the estimate is the
 // one of the clean log, bit for bit.
 TEST(RegionPipeline, BadStampsAreDroppedCountedAndChangeNothing) {
-  io::SensorLog bad = drive().log;
+  messages::SensorLog bad = drive().log;
   const std::size_t n_uwb = bad.uwb.size(), n_gnss = bad.gnss.size();
   auto nan_range = bad.uwb[100];
   nan_range.t = std::numeric_limits<double>::quiet_NaN();
@@ -334,11 +334,11 @@ TEST(RegionPipeline, BadStampsAreDroppedCountedAndChangeNothing) {
 
 // A log that never moves far enough cannot start the filters: a clear error, not a guess.
 TEST(RegionPipeline, ALogThatNeverAlignsIsAClearError) {
-  io::SensorLog still = drive().log;
+  messages::SensorLog still = drive().log;
   for (auto& f : still.gnss) f.position = Eigen::Vector3d(1.0, 2.0, 0.0);
   still.uwb.clear();
   EXPECT_THROW((void)ri::run(still, ri::Estimator::fkf, ri::Settings{}), std::invalid_argument);
-  io::SensorLog no_imu = drive().log;
+  messages::SensorLog no_imu = drive().log;
   no_imu.imu.clear();
   EXPECT_THROW((void)ri::run(no_imu, ri::Estimator::fkf, ri::Settings{}), std::invalid_argument);
 }

@@ -130,9 +130,9 @@ TEST(RegionRecogniser, PosteriorsAreTheForwardRecursionAndHoldOverUnusableEpochs
 }
 
 TEST(RegionRecogniser, FeaturesAreTheSatelliteCountAndMeanCn0OfEachEpoch) {
-  std::vector<io::SatEpoch> epochs(3);
+  std::vector<messages::SatEpoch> epochs(3);
   epochs[0].t = 1.0;
-  epochs[0].sats = {{1, 30.0, 10.0, 40.0}, {2, 60.0, 200.0, 45.0}, {3, io::kUnknown, io::kUnknown, 29.0}};
+  epochs[0].sats = {{1, 30.0, 10.0, 40.0}, {2, 60.0, 200.0, 45.0}, {3, messages::kUnknown, messages::kUnknown, 29.0}};
   epochs[1].t = 2.0;  // nothing tracked
   epochs[2].t = 3.0;
   epochs[2].sats = {{7, 10.0, 90.0, 33.5}};

@@ -105,15 +105,15 @@ void speed_status_is_counted() {
   Harness<Core> h(true);
   h.drive(-1, {}, false);
   const Gaussian<L::size> before = belief_of(h.a->core());
-  h.a->speed(io::SpeedSample{0.1, std::numeric_limits<double>::quiet_NaN()});
+  h.a->speed(messages::SpeedSample{0.1, std::numeric_limits<double>::quiet_NaN()});
   EXPECT_EQ(h.a->track().rejected_speed, 1u);
   expect_same(belief_of(h.a->core()), before);
   const double speed = L::get<"v">(before.mean).norm();
-  h.a->speed(io::SpeedSample{0.1, speed});
+  h.a->speed(messages::SpeedSample{0.1, speed});
   EXPECT_EQ(h.a->track().rejected_speed, 1u);
   // The NHC (the default, use_speed false) does not read the value: a NaN speed is accepted.
   Harness<Core> nhc(false);
-  nhc.a->speed(io::SpeedSample{0.0, std::numeric_limits<double>::quiet_NaN()});
+  nhc.a->speed(messages::SpeedSample{0.0, std::numeric_limits<double>::quiet_NaN()});
   EXPECT_EQ(nhc.a->track().rejected_speed, 0u);
 }
 

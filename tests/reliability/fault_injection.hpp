@@ -4,7 +4,7 @@
 // covariance symmetric and positive definite.
 #pragma once
 
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/pipelines/region_imm/run.hpp"
 #include "fault_stream.hpp"
 
@@ -50,7 +50,7 @@ struct Checked {
   void after() {
     if (runner.started) check_estimator(runner.est, checks);
   }
-  void propagate(const io::ImuSample& u, double dt) {
+  void propagate(const messages::ImuSample& u, double dt) {
     runner.propagate(u, dt);
     after();
   }
@@ -59,10 +59,10 @@ struct Checked {
     runner.on(m);
     after();
   }
-  void on(const io::SpeedSample& m) { forward(m); }
-  void on(const io::UwbRange& m) { forward(m); }
-  void on(const io::GnssFix& m) { forward(m); }
-  void on(const io::SatEpoch& m) { forward(m); }
+  void on(const messages::SpeedSample& m) { forward(m); }
+  void on(const messages::UwbRange& m) { forward(m); }
+  void on(const messages::GnssFix& m) { forward(m); }
+  void on(const messages::SatEpoch& m) { forward(m); }
 };
 
 }  // namespace ctxfuse::reliability

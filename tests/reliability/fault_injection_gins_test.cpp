@@ -41,8 +41,8 @@ constexpr double kEarthRadius = 6378137.0;
 
 struct Sim {
   test::Drive drive;
-  std::vector<io::ImuSample> imu;
-  std::vector<io::GnssFix> fixes;
+  std::vector<messages::ImuSample> imu;
+  std::vector<messages::GnssFix> fixes;
 };
 
 const Sim& sim_drive() {
@@ -61,12 +61,12 @@ const Sim& sim_drive() {
       const Eigen::Vector3d llh = st.truth.get<"p">();
       const Eigen::Vector3d noise = kFixSigma * test::standard_normal<3>(rng);
       const Eigen::Vector3d noisy = earth::GeodeticRetraction::inject(llh, noise);
-      io::GnssFix f;
+      messages::GnssFix f;
       f.t = kT0 + st.t;
-      f.frame = io::PositionFrame::geodetic;
+      f.frame = messages::PositionFrame::geodetic;
       f.position = {noisy(0) / test::kDeg, noisy(1) / test::kDeg, noisy(2)};
       f.cov = Eigen::Matrix3d::Identity() * kFixSigma * kFixSigma;
-      f.quality = io::FixQuality::floating;  // its 0.25 m sigma floor is below the fixes' 0.3 m
+      f.quality = messages::FixQuality::floating;  // its 0.25 m sigma floor is below the fixes' 0.3 m
       k.fixes.push_back(f);
     }
     return k;
@@ -123,7 +123,7 @@ struct CheckedPass {
   void check() {
     if (pass.aligned()) checks.check(finite(pass.belief().nominal), pass.belief().cov);
   }
-  void propagate(const io::ImuSample& u, double dt) {
+  void propagate(const messages::ImuSample& u, double dt) {
     pass.propagate(u, dt);
     check();
   }
@@ -208,7 +208,7 @@ void check_fault(const Fault& f) {
   } else if (f.kind == FaultKind::clock_jump && f.clock_jump_s < 0.0) {
     // The samples after the jump stamped (2 s early) before the last one delivered.
     const auto& v = sim_drive().imu;
-    const double last = std::prev(std::partition_point(v.begin(), v.end(), [&](const io::ImuSample& m) { return m.t < f.begin; }))->t;
+    const double last = std::prev(std::partition_point(v.begin(), v.end(), [&](const messages::ImuSample& m) { return m.t < f.begin; }))->t;
     EXPECT_EQ(out.replay.imu.backwards, in_window(v, f.begin, last - f.clock_jump_s));
     evidence = format("backwards dropped: imu %zu, gnss %zu", out.replay.imu.backwards, out.replay.streams[0].backwards);
   } else if (f.kind == FaultKind::clock_jump) {

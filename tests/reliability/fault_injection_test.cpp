@@ -359,7 +359,7 @@ TEST(FaultInjection, CleanRunsAreClean) {
 TEST(FaultInjection, GnssAloneHoldsItsLastPositionThroughANonFiniteFix) {
   ri::GnssOnly est;
   est.start(0.0, Gaussian<ri::L::size>{});
-  io::GnssFix fix;
+  messages::GnssFix fix;
   fix.t = 1.0;
   fix.position = Eigen::Vector3d(3.0, 4.0, 0.0);
   est.gnss(fix);

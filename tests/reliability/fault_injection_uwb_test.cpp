@@ -38,7 +38,7 @@ constexpr double recovery_s = 10.0, window_s = 20.0;
 const SimulatedDrive& drive() { return simulated_drive(); }
 /// Where the faults start: the middle of the indoor stretch.
 double fault_time() { return drive().indoor_middle; }
-const std::vector<io::UwbRange>& ranges() { return drive().log.uwb; }
+const std::vector<messages::UwbRange>& ranges() { return drive().log.uwb; }
 
 const nu::Settings& settings() {
   static const nu::Settings s;
@@ -52,7 +52,7 @@ struct CheckedEpochs {
   nu::EpochProcessor<Ekf, nu::NoNlosHandling>& process;
   const Ekf& est;
   BeliefChecks& checks;
-  void operator()(std::span<const io::UwbRange> epoch) {
+  void operator()(std::span<const messages::UwbRange> epoch) {
     process(epoch);
     if (est.started()) checks.check(est.belief());
   }
@@ -78,7 +78,7 @@ RunOutcome run(const Fault* f) {
   nu::RangeHandler<decltype(epochs)> handler{epochs};
   const double stop = fault_time() + 30.0 + recovery_s + window_s + 2.0;
   const auto until = before(ranges(), stop);
-  const std::span<const io::ImuSample> no_imu;
+  const std::span<const messages::ImuSample> no_imu;
   out.replay = f ? io::replay_tampered(handler, FaultTamper(*f), no_imu, until)
                  : io::replay_tampered(handler, io::NoTamper{}, no_imu, until);
   epochs.flush();
@@ -127,7 +127,7 @@ int first_anchor_after(double t) {
 
 /// Ranges of anchor `id` (any if < 0) stamped in [a, b).
 std::size_t ranges_in(double a, double b, int id = -1) {
-  return static_cast<std::size_t>(std::count_if(ranges().begin(), ranges().end(), [&](const io::UwbRange& r) {
+  return static_cast<std::size_t>(std::count_if(ranges().begin(), ranges().end(), [&](const messages::UwbRange& r) {
     return r.t >= a && r.t < b && (id < 0 || r.anchor_id == id);
   }));
 }

@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "ctxfuse/core/gaussian.hpp"
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/io/replay.hpp"
 #include "ctxfuse/sim/scenarios.hpp"
 #include "ctxfuse/sim/streams.hpp"
@@ -34,10 +34,10 @@ enum class FaultKind { nan_value, inf_value, nan_stamp, gnss_jump, dropout, dupl
 
 template <class Msg>
 constexpr StreamId stream_of() {
-  if constexpr (std::is_same_v<Msg, io::ImuSample>) return StreamId::imu;
-  else if constexpr (std::is_same_v<Msg, io::SpeedSample>) return StreamId::speed;
-  else if constexpr (std::is_same_v<Msg, io::UwbRange>) return StreamId::uwb;
-  else if constexpr (std::is_same_v<Msg, io::GnssFix>) return StreamId::gnss;
+  if constexpr (std::is_same_v<Msg, messages::ImuSample>) return StreamId::imu;
+  else if constexpr (std::is_same_v<Msg, messages::SpeedSample>) return StreamId::speed;
+  else if constexpr (std::is_same_v<Msg, messages::UwbRange>) return StreamId::uwb;
+  else if constexpr (std::is_same_v<Msg, messages::GnssFix>) return StreamId::gnss;
   else return StreamId::sat_epochs;
 }
 
@@ -107,7 +107,7 @@ class FaultTamper {
         if (hit) m.t = std::numeric_limits<double>::quiet_NaN();
         return true;
       case FaultKind::gnss_jump:
-        if constexpr (std::is_same_v<Msg, io::GnssFix>)
+        if constexpr (std::is_same_v<Msg, messages::GnssFix>)
           if (hit) m.position.x() += f_.jump_m;
         return true;
       case FaultKind::dropout: return !hit;
@@ -118,7 +118,7 @@ class FaultTamper {
         if (hit && previous && (++mem.hits % 2 == 0)) m.t = previous->t - f_.reorder_s;
         return true;
       case FaultKind::wrong_anchor:
-        if constexpr (std::is_same_v<Msg, io::UwbRange>) {
+        if constexpr (std::is_same_v<Msg, messages::UwbRange>) {
           if (hit && anchor_ < 0) anchor_ = m.anchor_id;
           if (hit && m.anchor_id == anchor_) m.anchor_position.x() += f_.anchor_error_m;
         }
@@ -135,22 +135,22 @@ class FaultTamper {
   };
   template <class Msg>
   Memory<Msg>& memory() {
-    if constexpr (std::is_same_v<Msg, io::ImuSample>) return imu_;
-    else if constexpr (std::is_same_v<Msg, io::SpeedSample>) return speed_;
-    else if constexpr (std::is_same_v<Msg, io::UwbRange>) return uwb_;
-    else if constexpr (std::is_same_v<Msg, io::GnssFix>) return gnss_;
+    if constexpr (std::is_same_v<Msg, messages::ImuSample>) return imu_;
+    else if constexpr (std::is_same_v<Msg, messages::SpeedSample>) return speed_;
+    else if constexpr (std::is_same_v<Msg, messages::UwbRange>) return uwb_;
+    else if constexpr (std::is_same_v<Msg, messages::GnssFix>) return gnss_;
     else return epochs_;
   }
   template <class Msg>
   static void corrupt(Msg& m, double bad) {
-    if constexpr (std::is_same_v<Msg, io::ImuSample>) {
+    if constexpr (std::is_same_v<Msg, messages::ImuSample>) {
       m.gyro.z() = bad;
       m.accel.x() = bad;
-    } else if constexpr (std::is_same_v<Msg, io::SpeedSample>) {
+    } else if constexpr (std::is_same_v<Msg, messages::SpeedSample>) {
       m.speed_mps = bad;
-    } else if constexpr (std::is_same_v<Msg, io::UwbRange>) {
+    } else if constexpr (std::is_same_v<Msg, messages::UwbRange>) {
       m.range_m = bad;
-    } else if constexpr (std::is_same_v<Msg, io::GnssFix>) {
+    } else if constexpr (std::is_same_v<Msg, messages::GnssFix>) {
       m.position.x() = bad;
     } else {
       m.t = bad;  // a receiver epoch carries nothing else the estimators read
@@ -159,15 +159,15 @@ class FaultTamper {
 
   Fault f_;
   int anchor_ = -1;
-  Memory<io::ImuSample> imu_;
-  Memory<io::SpeedSample> speed_;
-  Memory<io::UwbRange> uwb_;
-  Memory<io::GnssFix> gnss_;
-  Memory<io::SatEpoch> epochs_;
+  Memory<messages::ImuSample> imu_;
+  Memory<messages::SpeedSample> speed_;
+  Memory<messages::UwbRange> uwb_;
+  Memory<messages::GnssFix> gnss_;
+  Memory<messages::SatEpoch> epochs_;
 };
 
 /// Messages of stream `s` (not `all`) in `log` stamped in [a, b).
-inline std::size_t messages_in(const io::SensorLog& log, StreamId s, double a, double b) {
+inline std::size_t messages_in(const messages::SensorLog& log, StreamId s, double a, double b) {
   auto count = [&](const auto& v) {
     return static_cast<std::size_t>(std::count_if(v.begin(), v.end(), [&](const auto& m) { return m.t >= a && m.t < b; }));
   };
@@ -236,11 +236,11 @@ inline std::string format(const char* fmt, ...) {
 /// then counted as a `duplicate`, otherwise as `repeated`.
 inline bool shares_stamps(StreamId s) {
   switch (s) {
-    case StreamId::imu: return io::kSharedStamps<io::ImuSample>;
-    case StreamId::speed: return io::kSharedStamps<io::SpeedSample>;
-    case StreamId::uwb: return io::kSharedStamps<io::UwbRange>;
-    case StreamId::gnss: return io::kSharedStamps<io::GnssFix>;
-    case StreamId::sat_epochs: return io::kSharedStamps<io::SatEpoch>;
+    case StreamId::imu: return io::kSharedStamps<messages::ImuSample>;
+    case StreamId::speed: return io::kSharedStamps<messages::SpeedSample>;
+    case StreamId::uwb: return io::kSharedStamps<messages::UwbRange>;
+    case StreamId::gnss: return io::kSharedStamps<messages::GnssFix>;
+    case StreamId::sat_epochs: return io::kSharedStamps<messages::SatEpoch>;
     case StreamId::all: break;
   }
   return false;
@@ -300,7 +300,7 @@ struct Recovery {
 /// seed 11, its sensor log, and the middle of its indoor stretch (where their indoor faults start).
 struct SimulatedDrive {
   sim::Drive drive;
-  io::SensorLog log;
+  messages::SensorLog log;
   double indoor_middle = 0.0;
 };
 

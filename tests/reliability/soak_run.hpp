@@ -182,7 +182,7 @@ inline Report run(const Config& c, const std::function<void(const Report&, std::
     // The fixes at t1 (drawn whether or not an outage withholds them: the same noise either way).
     const Eigen::Vector3d antenna = fix.predict(ins_x.back(), nullptr);
     const Vector<3> z_ins = earth::GeodeticRetraction::inject(antenna, c.gnss_sigma * normal3(gnss_rng));
-    io::GnssFix planar_fix;
+    messages::GnssFix planar_fix;
     planar_fix.t = t1;
     Vector<2> n;  // drawn in index order, so that g++ and clang run the same soak
     for (int i = 0; i < 2; ++i) n(i) = gnss_rng.normal();
@@ -213,7 +213,7 @@ inline Report run(const Config& c, const std::function<void(const Report&, std::
       const double t = t0 + (k + 1) * kDt;
       imm.predict(planar_u[static_cast<std::size_t>(k)], kDt);
       check_modes();
-      if ((k + 1) % 10 == 0) imm.speed(io::SpeedSample{t, Track::speed(t)});
+      if ((k + 1) % 10 == 0) imm.speed(messages::SpeedSample{t, Track::speed(t)});
     }
     if (!outage) imm.gnss(planar_fix);
     imm.epoch(t1);

@@ -5,7 +5,7 @@
 #include <sstream>
 #include <string>
 
-#include "ctxfuse/io/sim_logs.hpp"
+#include "ctxfuse/sim/logs.hpp"
 
 namespace sim = ctxfuse::sim;
 
@@ -13,7 +13,7 @@ namespace {
 
 std::string serialise(const sim::Drive& d, const std::string& file) {
   std::ostringstream os;
-  sim::write_log(os, d, file);
+  sim::csv::write_log(os, d, file);
   return os.str();
 }
 
@@ -30,7 +30,7 @@ sim::DriveConfig short_config(std::uint64_t seed) {
 TEST(SimDeterminism, SameSeedGivesIdenticalBytesForEveryLog) {
   const auto a = sim::simulate_drive(short_config(7));
   const auto b = sim::simulate_drive(short_config(7));
-  for (const auto& f : sim::log_file_names()) {
+  for (const auto& f : sim::csv::log_file_names()) {
     const auto sa = serialise(a, f);
     EXPECT_GT(sa.size(), 100u) << f;
     EXPECT_EQ(sa, serialise(b, f)) << f;

@@ -22,7 +22,7 @@
 #include "cli/json.hpp"
 #include "cli/registry.hpp"
 #include "ctxfuse/classify/svm_folds.hpp"
-#include "ctxfuse/eval/classification.hpp"
+#include "ctxfuse/classify/confusion_matrix.hpp"
 
 namespace ctxfuse::cli::classify_cli {
 
@@ -165,7 +165,7 @@ inline LabelledCsv read_labelled_csv(const std::string& path, const ColumnSelect
 
 /// Accuracy, balanced accuracy, macro-F1, per-class precision / recall / F1 and the labelled
 /// confusion matrix, classes in ascending label order; the same figures into `json`.
-inline void print_metrics(std::span<const int> classes, const eval::ConfusionMatrix& cm, std::ostream& out, Json& json) {
+inline void print_metrics(std::span<const int> classes, const classify::ConfusionMatrix& cm, std::ostream& out, Json& json) {
   const int k = static_cast<int>(classes.size());
   const auto pct = [](double v) {
     std::ostringstream s;

@@ -1,6 +1,6 @@
 // `ctxfuse classify test`: scores a ctxfuse-svm or libsvm model on a labelled CSV: accuracy,
 // balanced accuracy, macro-F1, per-class precision / recall / F1 and the labelled confusion
-// matrix, classes in ascending label order (ctxfuse/eval/classification.hpp).
+// matrix, classes in ascending label order (ctxfuse/classify/confusion_matrix.hpp).
 #include <algorithm>
 #include <fstream>
 #include <iomanip>

@@ -19,7 +19,7 @@
 #include <ctxfuse/classify/region_transition.hpp>
 #include <ctxfuse/classify/svm.hpp>
 #include <ctxfuse/classify/svm_train.hpp>
-#include <ctxfuse/eval/classification.hpp>
+#include <ctxfuse/classify/confusion_matrix.hpp>
 
 #include "cli/options.hpp"
 #include "cli/registry.hpp"
@@ -107,7 +107,7 @@ std::string pct(double v) {
 }
 
 void report(std::ostream& out, std::string_view name, std::span<const int> truth, std::span<const int> pred, int n) {
-  const auto m = ctxfuse::eval::ConfusionMatrix::from_labels(truth, pred, n);
+  const auto m = ctxfuse::classify::ConfusionMatrix::from_labels(truth, pred, n);
   out << name << ": accuracy " << pct(m.accuracy()) << " %, balanced accuracy " << pct(m.balanced_accuracy())
       << " %, macro-F1 " << pct(m.macro_f1()) << " %\n  region  precision %  recall %  support\n";
   for (int k = 0; k < n; ++k)

@@ -22,8 +22,8 @@ namespace {
 
 namespace feat = ctxfuse::features;
 namespace fs = std::filesystem;
-using feat::detail::parse_field;
-using feat::detail::split_csv_line;
+using ctxfuse::io::detail::parse_field;
+using ctxfuse::io::detail::split_csv_line;
 
 struct Frame {
   int label = -1;  // -1: none
@@ -141,7 +141,7 @@ int run_dw1000(Args args, std::ostream& out, std::ostream& err) {
         std::vector<std::pair<double, fs::path>> folders;
         if (!fs::is_directory(fs::path(dir) / cls)) throw InputError("'" + (fs::path(dir) / cls).string() + "' is not a folder");
         for (const auto& e : fs::directory_iterator(fs::path(dir) / cls)) {
-          const double h = feat::detail::number_in_name(e.path().filename().string(), "height_", "cm");
+          const double h = ctxfuse::io::detail::number_in_name(e.path().filename().string(), "height_", "cm");
           if (std::isnan(h) || (!heights.empty() && std::find(heights.begin(), heights.end(), h) == heights.end())) continue;
           folders.emplace_back(h, e.path());
         }

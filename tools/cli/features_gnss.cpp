@@ -25,8 +25,8 @@ namespace ctxfuse::cli::features_cli {
 namespace {
 
 namespace feat = ctxfuse::features;
-using feat::detail::parse_field;
-using feat::detail::split_csv_line;
+using ctxfuse::io::detail::parse_field;
+using ctxfuse::io::detail::split_csv_line;
 
 struct Table {
   std::vector<std::string> names;

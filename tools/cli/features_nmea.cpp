@@ -35,7 +35,7 @@ double quantile(std::vector<double> v, double q) {
   return v[lo] + (pos - double(lo)) * (v[hi] - v[lo]);
 }
 
-void print_nmea_stats(std::ostream& out, const std::string& name, const feat::nmea::NmeaLog& log) {
+void print_nmea_stats(std::ostream& out, const std::string& name, const ctxfuse::io::nmea::NmeaLog& log) {
   const auto& s = log.stats;
   out << name << ": " << s.lines << " lines, " << log.epochs.size() << " epochs, " << s.sentences_used
       << " sentences used, " << s.ignored << " ignored types, " << s.checksum_failures << " bad checksums, "
@@ -73,8 +73,8 @@ int run_nmea(Args args, std::ostream& out, std::ostream& err) {
   if (split != (!train_out.empty() && !test_out.empty()))
     return usage_error(err, "features nmea", "--train-fraction needs both --train-out and --test-out (and vice versa)");
 
-  const auto rx = feat::nmea::read_nmea_file(nmea_path);
-  const auto ref = feat::nmea::read_nmea_file(ref_path);
+  const auto rx = ctxfuse::io::nmea::read_nmea_file(nmea_path);
+  const auto ref = ctxfuse::io::nmea::read_nmea_file(ref_path);
   print_nmea_stats(out, nmea_path, rx);
   print_nmea_stats(out, ref_path, ref);
 

@@ -33,11 +33,11 @@ int run_uwb_static(Args args, std::ostream& out, std::ostream& err) {
   app.add_option("--window", window, "ranges per causal window (1 = single range)")->check(CLI::Range(1, 64));
   app.add_flag("--height-column", height_column, "append a height_cm column (a group column for `classify train --groups`)");
   if (const auto status = parse_options(app, args, out, err)) return *status;
-  feat::UwbStaticReadStats stats;
-  std::vector<feat::UwbStaticRange> ranges;
+  ctxfuse::io::UwbStaticReadStats stats;
+  std::vector<ctxfuse::io::UwbStaticRange> ranges;
   try {
-    ranges = feat::read_uwb_static_dataset(dir, heights, stats);
-  } catch (const feat::UwbDataError& e) {
+    ranges = ctxfuse::io::read_uwb_static_dataset(dir, heights, stats);
+  } catch (const ctxfuse::io::UwbDataError& e) {
     err << "ctxfuse features uwb-static: " << e.what() << '\n';
     return 1;
   }

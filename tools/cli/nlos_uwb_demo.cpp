@@ -209,7 +209,7 @@ void latency_section(const DemoContext& ctx, Json& json, std::ostream& out) {
   });
   // Total: the gated graph with the paper's rule over the whole drive (run loop, records and
   // all) with the SVM; beside it the same run without the SVM and without the rule.
-  const std::span<const io::UwbRange> rs(r.drive_ranges.ranges);
+  const std::span<const messages::UwbRange> rs(r.drive_ranges.ranges);
   const auto t0 = std::chrono::steady_clock::now();
   const nu::Track total = nu::run(rs, nu::RangeSmoother<>(s), nu::PaperEpochRule{}, nu::NlosClassifier(s, r.svm_model), s);
   const auto t1 = std::chrono::steady_clock::now();

@@ -18,8 +18,8 @@ void run_section(const DemoContext& ctx, Json& json, std::ostream& out) {
   const sim::Drive& test = *ctx.drive;
   using Drives = eval::RegionTrainingDrives;
   const auto seed = test.config.seed;
-  const io::SensorLog log = sim::sensor_log(test);
-  const eval::TruthLog truth = sim::truth_log(test);
+  const messages::SensorLog log = sim::sensor_log(test);
+  const sim::TruthLog truth = sim::truth_log(test);
   const ri::Recogniser rec = train_region_recogniser(test.config);
   const std::string note = "trained on seeds " + std::to_string(seed + Drives::train_seed_offset) + "-" +
                            std::to_string(seed + Drives::train_seed_offset + Drives::train_drives - 1) + ", validated on seed " +

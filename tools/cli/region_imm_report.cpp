@@ -15,7 +15,7 @@
 
 namespace ctxfuse::cli {
 
-ri::RunResult run_region_pipeline(const io::SensorLog& log, ri::Estimator e, const ri::Settings& s, const ri::RunOptions& o) {
+ri::RunResult run_region_pipeline(const messages::SensorLog& log, ri::Estimator e, const ri::Settings& s, const ri::RunOptions& o) {
   return ri::run(log, e, s, o);
 }
 

@@ -20,8 +20,8 @@ namespace ctxfuse::cli {
 namespace ri = pipelines::region_imm;
 
 struct RegionImmRun {
-  const io::SensorLog& log;
-  const eval::TruthLog& truth;
+  const messages::SensorLog& log;
+  const sim::TruthLog& truth;
   const ri::Recogniser& recogniser;
   std::string recogniser_note;  // how it was trained, for the heading line
   Plotter* plotter = nullptr;
@@ -35,7 +35,7 @@ ri::Track region_imm_report(const RegionImmRun& in, Json& json, std::ostream& ou
 // cli/region_imm_report.cpp: each is a large instantiation (every estimator of ri::run, the
 // recogniser's PSO-SVM training), and the demo section, `run region-imm` and `region-study`
 // would otherwise each compile their own copy.
-ri::RunResult run_region_pipeline(const io::SensorLog& log, ri::Estimator e, const ri::Settings& s, const ri::RunOptions& o = {});
+ri::RunResult run_region_pipeline(const messages::SensorLog& log, ri::Estimator e, const ri::Settings& s, const ri::RunOptions& o = {});
 ri::Recogniser train_region_recogniser(const sim::DriveConfig& test);  // eval::train_recogniser_for
 ri::Recogniser train_region_recogniser(std::span<const ri::LabelledFeatures> train, const ri::LabelledFeatures& validate);
 

@@ -52,7 +52,7 @@ constexpr std::array<const char*, 4> kRegionColumn{"outdoor", "transition", "ind
 SeedResult study_seed(const sim::DriveConfig& cfg, const ri::Settings& s, std::ostream& out, Json& json) {
   const sim::Drive test = sim::simulate_drive(cfg);
   const Zoning zones(test);
-  const io::SensorLog log = sim::sensor_log(test);
+  const messages::SensorLog log = sim::sensor_log(test);
   const auto features = ri::gnss_features(log.sat_epochs);
   const auto labels = eval::region_labels(test.truth, features.t);
   const ri::Recognition r = ri::recognise(train_region_recogniser(cfg), features);

@@ -14,7 +14,7 @@
 #include "cli/plot.hpp"
 #include "cli/registry.hpp"
 #include "cli/run_registry.hpp"
-#include "ctxfuse/io/sim_logs.hpp"
+#include "ctxfuse/sim/logs.hpp"
 
 namespace ctxfuse::cli {
 namespace {
@@ -25,9 +25,9 @@ struct CommonOptions {
 
 int run_pipeline(const RunPipeline& p, const std::shared_ptr<void>& own, const CommonOptions& o, std::ostream& out,
                  std::ostream& err) {
-  io::SimLogs logs;
+  sim::SimLogs logs;
   try {
-    logs = io::read_sim_logs(o.data);
+    logs = sim::read_sim_logs(o.data);
   } catch (const std::exception& e) {
     err << "ctxfuse run " << p.name << ": " << e.what() << '\n';
     return 1;

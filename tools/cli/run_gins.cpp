@@ -335,7 +335,7 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
   // Scoring, apart from the run: the reference's RTK-fixed epochs (--reference, else with
   // --outage the recording's own .pos).
   eval::GinsOutageScores sc;
-  std::vector<io::GnssFix> reference;
+  std::vector<messages::GnssFix> reference;
   if (!o.reference.empty()) {
     try {
       reference = io::to_gnss_fixes(io::read_rtklib_pos(o.reference));

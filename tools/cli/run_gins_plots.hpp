@@ -44,7 +44,7 @@ inline double sigma_horizontal_at(std::span<const pipelines::gins::TrajectoryRow
   return (1.0 - w) * h(a) + w * h(*it);
 }
 
-inline void plot_gins(Plotter& plotter, std::span<const io::GnssFix> fixes, const pipelines::gins::RunResult& res,
+inline void plot_gins(Plotter& plotter, std::span<const messages::GnssFix> fixes, const pipelines::gins::RunResult& res,
                       const eval::GinsOutageScores& scores) {
   using Series = Plotter::Series;
   const auto ref = eval::rtk_fixed_reference(fixes);

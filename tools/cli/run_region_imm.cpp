@@ -13,7 +13,7 @@
 #include "cli/region_imm_report.hpp"
 #include "cli/run_registry.hpp"
 #include "ctxfuse/eval/region_training.hpp"
-#include "ctxfuse/io/sim_logs.hpp"
+#include "ctxfuse/sim/logs.hpp"
 #include "ctxfuse/pipelines/region_imm/recogniser_io.hpp"
 
 namespace ctxfuse::cli {
@@ -40,7 +40,7 @@ std::shared_ptr<void> add_options(CLI::App& app) {
 }
 
 ri::LabelledFeatures labelled(const std::string& dir) {
-  const io::SimLogs logs = io::read_sim_logs(dir);
+  const sim::SimLogs logs = sim::read_sim_logs(dir);
   return eval::labelled_features(logs.sensors, logs.truth);
 }
 

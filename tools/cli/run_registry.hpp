@@ -1,5 +1,5 @@
 // Pipelines for `ctxfuse run PIPELINE --data DIR`. A pipeline turns the sensor streams of a set
-// of logs (the files of `ctxfuse sim`, read by ctxfuse/io/sim_logs.hpp, truth kept apart) into
+// of logs (the files of `ctxfuse sim`, read by ctxfuse/sim/logs.hpp, truth kept apart) into
 // a trajectory; `run` scores it against truth.csv and writes the JSON and CSV outputs. Each
 // pipeline declares its own options on a CLI11 sub-command and lists the files it reads (shown
 // by `ctxfuse run --help`). Pipelines register themselves from their own tools/cli/*.cpp:
@@ -19,15 +19,15 @@
 #include "cli/options.hpp"
 #include "ctxfuse/eval/trajectory.hpp"
 #include "ctxfuse/eval/truth.hpp"
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 
 namespace ctxfuse::cli {
 
 class Plotter;
 
 struct RunInput {
-  const io::SensorLog& sensors;
-  const eval::TruthLog& truth;  // for scoring only; a pipeline never reads it to estimate
+  const messages::SensorLog& sensors;
+  const sim::TruthLog& truth;  // for scoring only; a pipeline never reads it to estimate
   std::filesystem::path data_dir;
   std::ostream& out;  // the pipeline's own tables, printed before the scores
   Plotter* plotter = nullptr;

@@ -12,7 +12,7 @@
 #include "cli/options.hpp"
 #include "cli/registry.hpp"
 #include "cli/scenario_flag.hpp"
-#include "ctxfuse/io/sim_logs.hpp"
+#include "ctxfuse/sim/logs.hpp"
 #include "ctxfuse/sim/platform_recording.hpp"
 
 namespace ctxfuse::cli {
@@ -38,7 +38,7 @@ int platform_command(const std::string& platform, std::uint64_t seed, double dur
     return 1;
   }
   std::size_t floats = 0;
-  for (const auto& f : run.fixes) floats += f.quality == io::FixQuality::floating;
+  for (const auto& f : run.fixes) floats += f.quality == messages::FixQuality::floating;
   out << "wrote a " << c.duration_s << " s " << platform << " run (seed " << seed << ") to " << dir << ": " << run.imu.size()
       << " IMU samples, " << run.fixes.size() << " GNSS epochs (" << floats << " float), at rest for the first " << run.moving_off_s
       << " s; truth in " << (std::filesystem::path(dir) / "reference" / "truth.pos").string() << "; a UWB site (8 anchors, 100 Hz) in "
@@ -79,7 +79,7 @@ int sim_command(Args args, std::ostream& out, std::ostream& err) {
     return 2;
   }
   try {
-    io::write_drive_logs(drive, dir);
+    sim::write_drive_logs(drive, dir);
   } catch (const std::exception& e) {
     err << "ctxfuse sim: " << e.what() << '\n';
     return 1;

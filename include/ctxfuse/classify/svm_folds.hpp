@@ -23,7 +23,7 @@
 #include <utility>
 #include <vector>
 
-#include "ctxfuse/eval/classification.hpp"
+#include "ctxfuse/classify/confusion_matrix.hpp"
 
 namespace ctxfuse::classify {
 
@@ -148,7 +148,7 @@ constexpr std::string_view to_string(CvScore s) {
   return "?";
 }
 
-inline double score_of(const eval::ConfusionMatrix& m, CvScore s) {
+inline double score_of(const ConfusionMatrix& m, CvScore s) {
   switch (s) {
     case CvScore::accuracy: return m.accuracy();
     case CvScore::balanced_accuracy: return m.balanced_accuracy();
@@ -159,14 +159,14 @@ inline double score_of(const eval::ConfusionMatrix& m, CvScore s) {
 
 /// Confusion matrix over `classes` (index = position in `classes`) of the samples where
 /// `include` is true (all when empty); labels outside `classes` throw std::out_of_range.
-inline eval::ConfusionMatrix confusion_over(std::span<const int> classes, std::span<const int> truth,
+inline ConfusionMatrix confusion_over(std::span<const int> classes, std::span<const int> truth,
                                             std::span<const int> predicted, const std::vector<bool>& include = {}) {
   const auto index = [&](int label) {
     const auto it = std::find(classes.begin(), classes.end(), label);
     if (it == classes.end()) throw std::out_of_range("confusion_over: label " + std::to_string(label) + " is not a known class");
     return static_cast<int>(it - classes.begin());
   };
-  eval::ConfusionMatrix m(static_cast<int>(classes.size()));
+  ConfusionMatrix m(static_cast<int>(classes.size()));
   for (std::size_t i = 0; i < truth.size(); ++i)
     if (include.empty() || include[i]) m.add(index(truth[i]), index(predicted[i]));
   return m;

@@ -36,7 +36,7 @@ struct GinsOutageScores {
   std::size_t outages_scored = 0;  // windows with at least one scored epoch (forward)
 };
 
-inline GinsOutageScores score_outages(std::span<const io::GnssFix> fixes, const pipelines::gins::RunResult& run) {
+inline GinsOutageScores score_outages(std::span<const messages::GnssFix> fixes, const pipelines::gins::RunResult& run) {
   const auto ref = rtk_fixed_reference(fixes);
   GinsOutageScores s;
   s.forward = outage_errors(lat_lon_of(run.forward), ref, run.windows);
@@ -48,7 +48,7 @@ inline GinsOutageScores score_outages(std::span<const io::GnssFix> fixes, const 
 /// The whole run against a reference: the horizontal error at every RTK-fixed reference epoch
 /// inside the trajectory's span (one window over the reference's span; epochs outside the
 /// trajectory are counted as unscored).
-inline GinsOutageScores score_whole_run(std::span<const io::GnssFix> reference, const pipelines::gins::RunResult& run) {
+inline GinsOutageScores score_whole_run(std::span<const messages::GnssFix> reference, const pipelines::gins::RunResult& run) {
   const auto ref = rtk_fixed_reference(reference);
   GinsOutageScores s;
   if (ref.empty()) return s;

@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "ctxfuse/eval/classification.hpp"
+#include "ctxfuse/classify/confusion_matrix.hpp"
 #include "ctxfuse/eval/hanyang_protocol.hpp"
 #include "ctxfuse/io/hanyang_uwb.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/calibrated_ekf.hpp"
@@ -49,14 +49,14 @@ inline Eigen::Vector3d reference_at(std::span<const io::HanyangReferencePose> re
 }
 
 /// Range minus the reference distance (tag at reference + (0, 0, tag height)); NaN outside.
-inline double range_residual(const io::UwbRange& r, std::span<const io::HanyangReferencePose> ref, double tag_height_m) {
+inline double range_residual(const messages::UwbRange& r, std::span<const io::HanyangReferencePose> ref, double tag_height_m) {
   Eigen::Vector3d p = reference_at(ref, r.t);
   p.z() += tag_height_m;
   return r.range_m - (p - r.anchor_position).norm();
 }
 
 /// -1 unlabelled (outside the reference), else kNlosLabel / kLosLabel.
-inline int residual_label(const io::UwbRange& r, std::span<const io::HanyangReferencePose> ref,
+inline int residual_label(const messages::UwbRange& r, std::span<const io::HanyangReferencePose> ref,
                           const pipelines::nlos_uwb::Settings& s) {
   const double e = range_residual(r, ref, s.tag_height_m);
   if (std::isnan(e)) return -1;
@@ -68,7 +68,7 @@ struct Identification {
   std::size_t scored = 0, labelled_nlos = 0;
 };
 
-inline Identification identification_of(const ConfusionMatrix& m) {
+inline Identification identification_of(const classify::ConfusionMatrix& m) {
   return {m.precision(1), m.recall(1), m.accuracy(), m.total(), m.support(1)};
 }
 
@@ -80,7 +80,7 @@ struct IdentificationReport {
 /// evidence are not scored for it).
 inline IdentificationReport identification(const pipelines::nlos_uwb::Track& track, std::span<const io::HanyangReferencePose> ref,
                                            const pipelines::nlos_uwb::Settings& s) {
-  ConfusionMatrix svm(2), cons(2), ds(2);
+  classify::ConfusionMatrix svm(2), cons(2), ds(2);
   for (const auto& rec : track.ranges) {
     const int y = residual_label(rec.range, ref, s);
     if (y < 0) continue;
@@ -99,7 +99,7 @@ inline void append_svm_rows(const std::filesystem::path& case_dir, const pipelin
   namespace nu = pipelines::nlos_uwb;
   const auto ranges = io::read_hanyang_uwb(case_dir).uwb_ranges();
   const auto ref = io::read_hanyang_reference(case_dir);
-  const nu::Track track = nu::run(std::span<const io::UwbRange>(ranges), nu::RangeEkf<>(s), nu::NoNlosHandling{}, nu::NlosClassifier(s), s);
+  const nu::Track track = nu::run(std::span<const messages::UwbRange>(ranges), nu::RangeEkf<>(s), nu::NoNlosHandling{}, nu::NlosClassifier(s), s);
   for (const auto& rec : track.ranges) {
     const int y = residual_label(rec.range, ref, s);
     if (y < 0 || !rec.input.finite()) continue;
@@ -188,7 +188,7 @@ inline constexpr std::array<std::string_view, 17> kNlosUwbVariants{
     "motion_model_only"};   // the "IMU only" baseline: the motion model from the first fix
 
 /// Runs one variant of kNlosUwbVariants (by index) on `rs`. No reference is involved.
-inline pipelines::nlos_uwb::Track run_nlos_uwb_variant(std::size_t index, std::span<const io::UwbRange> rs,
+inline pipelines::nlos_uwb::Track run_nlos_uwb_variant(std::size_t index, std::span<const messages::UwbRange> rs,
                                                        const pipelines::nlos_uwb::NlosClassifier& classifier,
                                                        const pipelines::nlos_uwb::Settings& s) {
   namespace nu = pipelines::nlos_uwb;
@@ -220,7 +220,7 @@ inline pipelines::nlos_uwb::Track run_nlos_uwb_variant(std::size_t index, std::s
 /// Runs the variants named in `names` (every one of kNlosUwbVariants, in that order, when
 /// empty) on `rs` with `classifier`; nothing is scored (rmse NaN). Throws std::invalid_argument
 /// for an unknown name or settings that do not validate.
-inline std::vector<NlosUwbVariant> run_nlos_uwb_variants(std::span<const io::UwbRange> rs,
+inline std::vector<NlosUwbVariant> run_nlos_uwb_variants(std::span<const messages::UwbRange> rs,
                                                          const pipelines::nlos_uwb::NlosClassifier& classifier,
                                                          const pipelines::nlos_uwb::Settings& s,
                                                          std::span<const std::string_view> names = {}) {

@@ -36,7 +36,7 @@
 #include <string_view>
 #include <vector>
 
-#include "ctxfuse/eval/classification.hpp"
+#include "ctxfuse/classify/confusion_matrix.hpp"
 #include "ctxfuse/eval/nlos_uwb.hpp"
 #include "ctxfuse/eval/position_error.hpp"
 #include "ctxfuse/eval/trajectory.hpp"
@@ -78,7 +78,7 @@ using RangeRateSvm = classify::SvmModel<1, 2>;
 
 /// The simulated ranges as a recording holds them and their truth labels (same order).
 struct LabelledRanges {
-  std::vector<io::UwbRange> ranges;
+  std::vector<messages::UwbRange> ranges;
   std::vector<bool> nlos;
 };
 
@@ -141,7 +141,7 @@ inline constexpr std::array<std::string_view, 14> kNlosSimVariants{
 inline void append_sim_svm_rows(const sim::Drive& d, const pipelines::nlos_uwb::Settings& s, pipelines::nlos_uwb::LabelledSvmRows& rows) {
   namespace nu = pipelines::nlos_uwb;
   const LabelledRanges lr = labelled_ranges(d);
-  const nu::Track track = nu::run(std::span<const io::UwbRange>(lr.ranges), nu::RangeEkf<>(s), nu::NoNlosHandling{}, nu::NlosClassifier(s), s);
+  const nu::Track track = nu::run(std::span<const messages::UwbRange>(lr.ranges), nu::RangeEkf<>(s), nu::NoNlosHandling{}, nu::NlosClassifier(s), s);
   if (track.ranges.size() != lr.ranges.size()) throw std::logic_error("append_sim_svm_rows: the run lost ranges");
   for (std::size_t i = 0; i < track.ranges.size(); ++i) {
     if (!track.ranges[i].input.finite()) continue;
@@ -156,7 +156,7 @@ inline void score_identification(const pipelines::nlos_uwb::Track& track, const 
                                  NlosSimReport& rep) {
   namespace nu = pipelines::nlos_uwb;
   if (track.ranges.size() != lr.ranges.size()) throw std::logic_error("score_identification: the run lost ranges");
-  ConfusionMatrix vu(2), both(2), cons(2), ds(2);
+  classify::ConfusionMatrix vu(2), both(2), cons(2), ds(2);
   for (std::size_t i = 0; i < track.ranges.size(); ++i) {
     const auto& rec = track.ranges[i];
     const int y = lr.nlos[i] ? 1 : 0;
@@ -240,7 +240,7 @@ inline NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::ui
   const LabelledRanges& lr = rep.drive_ranges;
   rep.ranges = lr.ranges.size();
   for (bool b : lr.nlos) rep.ranges_nlos += b;
-  const std::span<const io::UwbRange> rs(lr.ranges);
+  const std::span<const messages::UwbRange> rs(lr.ranges);
   const nu::NlosClassifier classifier(s, svm);
 
   const nu::Track ls = nu::least_squares_track(rs, s);
@@ -279,18 +279,18 @@ inline NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::ui
   add_run(kNlosSimVariants[6], nu::run(rs, nu::RangeSmoother<>(s), nu::PerRangeRule{}, classifier, s));
   add_run(kNlosSimVariants[7], nu::run(rs, nu::RangeEkf<>(s), nu::PaperEpochRule{}, classifier, s));
   add_run(kNlosSimVariants[8], nu::run(rs, nu::RangeEkf<>(s), nu::NoNlosHandling{}, classifier, s));
-  std::vector<io::ImuSample> imu;
+  std::vector<messages::ImuSample> imu;
   imu.reserve(d.imu.size());
   for (const auto& u : d.imu) imu.push_back(sim::imu_sample(u));
   const nu::ImuFusionSettings sheet = imu_fusion_settings(d.config.imu);
   using ImuGraph = nu::ImuRangeSmoother<10, NoGate>;
-  add_run(kNlosSimVariants[9], nu::run(std::span<const io::ImuSample>(imu), rs, ImuGraph(s, sheet), nu::NoNlosHandling{}, classifier, s));
-  add_run(kNlosSimVariants[10], nu::run(std::span<const io::ImuSample>(imu), rs, ImuGraph(s, sheet), nu::PaperEpochRule{}, classifier, s));
-  add_run(kNlosSimVariants[11], nu::run(std::span<const io::ImuSample>(imu), rs, nu::ImuRangeSmoother<>(s, sheet), nu::PaperEpochRule{},
+  add_run(kNlosSimVariants[9], nu::run(std::span<const messages::ImuSample>(imu), rs, ImuGraph(s, sheet), nu::NoNlosHandling{}, classifier, s));
+  add_run(kNlosSimVariants[10], nu::run(std::span<const messages::ImuSample>(imu), rs, ImuGraph(s, sheet), nu::PaperEpochRule{}, classifier, s));
+  add_run(kNlosSimVariants[11], nu::run(std::span<const messages::ImuSample>(imu), rs, nu::ImuRangeSmoother<>(s, sheet), nu::PaperEpochRule{},
                                         classifier, s));
   add_run(kNlosSimVariants[12],
-          nu::run(std::span<const io::ImuSample>(imu), rs, nu::ImuRangeEkf<NoGate>(s, sheet), nu::PaperEpochRule{}, classifier, s));
-  add_run(kNlosSimVariants[13], nu::run(std::span<const io::ImuSample>(imu), rs, nu::ImuRangeEkf<>(s, sheet), nu::PaperEpochRule{}, classifier, s));
+          nu::run(std::span<const messages::ImuSample>(imu), rs, nu::ImuRangeEkf<NoGate>(s, sheet), nu::PaperEpochRule{}, classifier, s));
+  add_run(kNlosSimVariants[13], nu::run(std::span<const messages::ImuSample>(imu), rs, nu::ImuRangeEkf<>(s, sheet), nu::PaperEpochRule{}, classifier, s));
   score_identification(rep.proposed, lr, rep.svm_vu_model, rep);
   return rep;
 }

@@ -14,7 +14,7 @@
 #include <span>
 #include <vector>
 
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/models/earth.hpp"
 #include "ctxfuse/pipelines/gins/gnss_schedule.hpp"
 
@@ -30,11 +30,11 @@ struct TimedLatLon {
 };
 
 /// Reference epochs: the RTK-fixed (Q = 1) fixes, geodetic, in radians.
-inline std::vector<TimedLatLon> rtk_fixed_reference(std::span<const io::GnssFix> fixes) {
+inline std::vector<TimedLatLon> rtk_fixed_reference(std::span<const messages::GnssFix> fixes) {
   constexpr double deg = 3.14159265358979323846 / 180.0;
   std::vector<TimedLatLon> out;
   for (const auto& f : fixes)
-    if (f.quality == io::FixQuality::fixed && f.frame == io::PositionFrame::geodetic)
+    if (f.quality == messages::FixQuality::fixed && f.frame == messages::PositionFrame::geodetic)
       out.push_back({f.t, f.position(0) * deg, f.position(1) * deg});
   return out;
 }

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "ctxfuse/eval/truth.hpp"
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/pipelines/region_imm/recogniser.hpp"
 #include "ctxfuse/sim/drive.hpp"
 #include "ctxfuse/sim/streams.hpp"
@@ -25,7 +25,7 @@ struct RegionTrainingDrives {
 };
 
 /// A log's features labelled with the true region at each epoch.
-inline pipelines::region_imm::LabelledFeatures labelled_features(const io::SensorLog& log, const TruthLog& truth) {
+inline pipelines::region_imm::LabelledFeatures labelled_features(const messages::SensorLog& log, const sim::TruthLog& truth) {
   pipelines::region_imm::LabelledFeatures out;
   out.features = pipelines::region_imm::gnss_features(log.sat_epochs);
   out.labels = region_labels(truth.truth, out.features.t);

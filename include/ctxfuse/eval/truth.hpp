@@ -1,5 +1,5 @@
 // Truth and labels: what a recording's reference system or the simulator knows and a sensor
-// does not. Pipelines never see these records (they run on io::SensorLog); only eval/, the
+// does not. Pipelines never see these records (they run on messages::SensorLog); only eval/, the
 // training of classifiers from labelled logs, and the CLI's scoring read them.
 #pragma once
 
@@ -11,39 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "ctxfuse/sim/drive.hpp"
+#include "ctxfuse/sim/records.hpp"
 
 namespace ctxfuse::eval {
-
-/// The label and true errors of one UWB range (matched to the range by time and anchor).
-struct UwbRangeLabel {
-  double t = 0.0;
-  int anchor_id = 0;
-  bool nlos = false;
-  double true_range_m = 0.0;
-  double nlos_bias_m = 0.0;
-};
-
-/// Whether one tracked satellite was received in line of sight.
-struct SatLabel {
-  double t = 0.0;
-  int sat_id = 0;
-  bool line_of_sight = true;
-};
-
-/// The true error of one GNSS fix.
-struct FixLabel {
-  double t = 0.0;
-  Eigen::Vector3d error = Eigen::Vector3d::Zero();           // fix - truth, ENU m
-  Eigen::Vector3d multipath_bias = Eigen::Vector3d::Zero();  // its correlated part
-};
-
-struct TruthLog {
-  std::vector<sim::TruthSample> truth;  // strictly increasing in time
-  std::vector<UwbRangeLabel> uwb;
-  std::vector<SatLabel> sats;
-  std::vector<FixLabel> fixes;  // empty when the log does not know them (only the simulator does)
-};
 
 namespace detail {
 /// Index of the truth sample at or before t (the first one before the truth starts).

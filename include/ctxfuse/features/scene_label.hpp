@@ -34,8 +34,8 @@ struct LabelledSceneEpoch {
 
 /// Labels every receiver epoch that has a GGA and a reference epoch within max_time_offset_s;
 /// other epochs are left out (no truth). Both logs must be in increasing time order.
-inline std::vector<LabelledSceneEpoch> label_scenes(std::span<const nmea::NmeaEpoch> receiver,
-                                                    std::span<const nmea::NmeaEpoch> reference,
+inline std::vector<LabelledSceneEpoch> label_scenes(std::span<const io::nmea::NmeaEpoch> receiver,
+                                                    std::span<const io::nmea::NmeaEpoch> reference,
                                                     const SceneLabelThresholds& thresholds) {
   std::vector<LabelledSceneEpoch> out;
   std::size_t j = 0;
@@ -57,7 +57,7 @@ inline std::vector<LabelledSceneEpoch> label_scenes(std::span<const nmea::NmeaEp
     if (has_position) {
       const auto& ref = *reference[j].gga;
       e.horizontal_error_m =
-          nmea::horizontal_distance_m(rx.gga->latitude_deg, rx.gga->longitude_deg, ref.latitude_deg, ref.longitude_deg);
+          io::nmea::horizontal_distance_m(rx.gga->latitude_deg, rx.gga->longitude_deg, ref.latitude_deg, ref.longitude_deg);
       e.label = e.horizontal_error_m < thresholds.open_max_error_m ? scene_open : scene_obstructed;
     }
     out.push_back(e);
@@ -65,12 +65,12 @@ inline std::vector<LabelledSceneEpoch> label_scenes(std::span<const nmea::NmeaEp
   return out;
 }
 
-/// The satellites of an NMEA epoch as feature-extractor input (ids = nmea::satellite_key),
+/// The satellites of an NMEA epoch as feature-extractor input (ids = io::nmea::satellite_key),
 /// written into `storage` (reused between epochs, so a long log does not allocate per epoch).
-inline GnssEpoch to_gnss_epoch(const nmea::NmeaEpoch& epoch, std::vector<SatelliteObservation>& storage) {
+inline GnssEpoch to_gnss_epoch(const io::nmea::NmeaEpoch& epoch, std::vector<SatelliteObservation>& storage) {
   storage.clear();
   for (const auto& s : epoch.satellites)
-    storage.push_back({nmea::satellite_key(s.system, s.prn), s.elevation_deg, s.azimuth_deg, s.snr_dbhz});
+    storage.push_back({io::nmea::satellite_key(s.system, s.prn), s.elevation_deg, s.azimuth_deg, s.snr_dbhz});
   return GnssEpoch{epoch.time_s, storage, epoch.pdop};
 }
 

@@ -20,7 +20,7 @@
 #include <span>
 
 #include "ctxfuse/core/status.hpp"
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 
 namespace ctxfuse::filters {
 
@@ -53,7 +53,7 @@ namespace detail {
 /// Gauss-Newton on the ranges from `p` (D = 2: z held at o.tag_height_m), with the checks of
 /// the header comment. The one solver behind multilaterate and multilaterate_3d.
 template <int D>
-MultilaterationOf<D> solve_ranges(std::span<const io::UwbRange> ranges, Eigen::Matrix<double, D, 1> p,
+MultilaterationOf<D> solve_ranges(std::span<const messages::UwbRange> ranges, Eigen::Matrix<double, D, 1> p,
                                   const MultilaterationOptions& o) {
   using V = Eigen::Matrix<double, D, 1>;
   using M = Eigen::Matrix<double, D, D>;
@@ -109,7 +109,7 @@ MultilaterationOf<D> solve_ranges(std::span<const io::UwbRange> ranges, Eigen::M
   return out;
 }
 
-inline Status check_ranges(std::span<const io::UwbRange> ranges, std::size_t needed) {
+inline Status check_ranges(std::span<const messages::UwbRange> ranges, std::size_t needed) {
   if (ranges.size() < needed) return Status::invalid(Problem::too_few_measurements);
   for (const auto& r : ranges)
     if (!std::isfinite(r.range_m) || !r.anchor_position.allFinite()) return Status::invalid(Problem::non_finite_measurement);
@@ -118,7 +118,7 @@ inline Status check_ranges(std::span<const io::UwbRange> ranges, std::size_t nee
 
 /// Where Gauss-Newton starts horizontally: o.initial, else off the anchors' centroid a little
 /// (on an anchor the Jacobian row vanishes).
-inline Eigen::Vector2d initial_xy(std::span<const io::UwbRange> ranges, const MultilaterationOptions& o) {
+inline Eigen::Vector2d initial_xy(std::span<const messages::UwbRange> ranges, const MultilaterationOptions& o) {
   if (o.initial.allFinite()) return o.initial;
   Eigen::Vector2d c = Eigen::Vector2d::Zero();
   for (const auto& r : ranges) c += r.anchor_position.head<2>();
@@ -127,7 +127,7 @@ inline Eigen::Vector2d initial_xy(std::span<const io::UwbRange> ranges, const Mu
 }  // namespace detail
 
 /// The position that best fits `ranges` (all of one time stamp, one per anchor).
-inline Multilateration multilaterate(std::span<const io::UwbRange> ranges, const MultilaterationOptions& o = {}) {
+inline Multilateration multilaterate(std::span<const messages::UwbRange> ranges, const MultilaterationOptions& o = {}) {
   Multilateration out;
   if (const Status st = detail::check_ranges(ranges, 3); !st.accepted()) {
     out.status = st;
@@ -140,7 +140,7 @@ inline Multilateration multilaterate(std::span<const io::UwbRange> ranges, const
 /// coplanar (o.tag_height_m unused; o.initial's x, y as in multilaterate). The cost has a
 /// minimum on each side of the anchors' mean height when they are nearly coplanar, so it
 /// solves from 1 m above and below their highest and lowest anchors and keeps the best fit.
-inline Multilateration3d multilaterate_3d(std::span<const io::UwbRange> ranges, const MultilaterationOptions& o = {}) {
+inline Multilateration3d multilaterate_3d(std::span<const messages::UwbRange> ranges, const MultilaterationOptions& o = {}) {
   Multilateration3d best;
   if (const Status st = detail::check_ranges(ranges, 4); !st.accepted()) {
     best.status = st;

@@ -20,7 +20,7 @@
 
 namespace ctxfuse::pipelines::gins {
 
-extern template RunResult run<Nav20>(std::span<const io::ImuSample>, std::span<const io::GnssFix>, const Settings&,
+extern template RunResult run<Nav20>(std::span<const messages::ImuSample>, std::span<const messages::GnssFix>, const Settings&,
                                      const RunOptions&);
 extern template TrajectoryRow trajectory_row<Nav20>(double, const eskf::Belief<Nav20>&, const Eigen::Vector3d&);
 
@@ -39,10 +39,10 @@ class GinsNav20Pass {
   GinsNav20Pass(const GinsNav20Pass&) = delete;
   GinsNav20Pass& operator=(const GinsNav20Pass&) = delete;
 
-  void propagate(const io::ImuSample& u, double dt);
-  void on(const io::ImuSample& u);
-  void on(const io::MagSample& m);
-  void on(const io::GnssFix& fix);
+  void propagate(const messages::ImuSample& u, double dt);
+  void on(const messages::ImuSample& u);
+  void on(const messages::MagSample& m);
+  void on(const messages::GnssFix& fix);
   void finish();
 
   bool aligned() const;

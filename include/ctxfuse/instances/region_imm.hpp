@@ -9,7 +9,7 @@
 
 namespace ctxfuse::pipelines::region_imm::detail {
 
-extern template RunResult run_any<void>(const io::SensorLog&, Estimator, const Settings&, const RunOptions&,
+extern template RunResult run_any<void>(const messages::SensorLog&, Estimator, const Settings&, const RunOptions&,
                                         UpdateObserver);
 
 }  // namespace ctxfuse::pipelines::region_imm::detail

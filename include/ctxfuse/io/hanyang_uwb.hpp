@@ -1,6 +1,6 @@
 // Reader of one dynamic case of the Hanyang outdoor UWB dataset
 // (Dynamic_measurements/{LOS,NLOS}/Trajectory_*/Case_*/): the per-anchor range files A<id>.csv
-// merged into one time-ordered stream of io::UwbRange, and the case's reference trajectory
+// merged into one time-ordered stream of messages::UwbRange, and the case's reference trajectory
 // (trajectory.csv), which is truth and so is read by its own function into its own type.
 //
 // - Range files are rosbag exports: "%time,field.stamp,field.id,field.x,...". Columns are
@@ -14,7 +14,7 @@
 // write_hanyang_case writes ranges and a reference in the same layout (simulated cases).
 #pragma once
 
-#include <ctxfuse/io/messages.hpp>
+#include <ctxfuse/messages/sensors.hpp>
 #include <ctxfuse/io/text.hpp>
 
 #include <Eigen/Core>
@@ -40,7 +40,7 @@ namespace ctxfuse::io {
 
 struct HanyangRange {
   std::int64_t t_ns = 0;  // exact stamp; range.t is the same in seconds (rounded to ~0.2 us)
-  UwbRange range;
+  messages::UwbRange range;
 };
 
 struct HanyangUwbCase {
@@ -50,8 +50,8 @@ struct HanyangUwbCase {
   std::size_t skipped_partial_last_lines = 0;  // a file's last line without its newline (cut short)
   std::vector<std::string> files;
 
-  std::vector<UwbRange> uwb_ranges() const {
-    std::vector<UwbRange> out;
+  std::vector<messages::UwbRange> uwb_ranges() const {
+    std::vector<messages::UwbRange> out;
     out.reserve(ranges.size());
     for (const auto& r : ranges) out.push_back(r.range);
     return out;
@@ -128,8 +128,8 @@ inline void read_hanyang_anchor_file(const std::filesystem::path& path, int anch
     for (int k = 0; k < 3; ++k) r.range.anchor_position[k] = f.real_in(c[2 + static_cast<std::size_t>(k)], -1e5, 1e5);
     r.range.range_m = f.real_in(c[5], 0.0, 1000.0);
     const double rssi = f.real_in(c[6], -200.0, 50.0, power), fp = f.real_in(c[7], -200.0, 50.0, power);
-    r.range.rssi_dbm = std::isfinite(rssi) ? rssi : kUnknown;
-    r.range.rssi_first_path_dbm = std::isfinite(fp) ? fp : kUnknown;
+    r.range.rssi_dbm = std::isfinite(rssi) ? rssi : messages::kUnknown;
+    r.range.rssi_first_path_dbm = std::isfinite(fp) ? fp : messages::kUnknown;
     out.non_finite_rssi += !std::isfinite(rssi) || !std::isfinite(fp);
     previous = r.t_ns;
     previous_line = file.line_number();
@@ -198,10 +198,10 @@ inline std::vector<HanyangReferencePose> read_hanyang_reference(const std::files
 /// (non-finite or negative times, ranges outside [0, 1000] m, times that do not increase within
 /// an anchor, an anchor whose position changes) before writing anything, std::runtime_error
 /// when a file cannot be written.
-inline void write_hanyang_case(const std::filesystem::path& dir, std::span<const UwbRange> ranges,
+inline void write_hanyang_case(const std::filesystem::path& dir, std::span<const messages::UwbRange> ranges,
                                std::span<const HanyangReferencePose> reference = {}) {
   namespace fs = std::filesystem;
-  std::map<int, std::vector<const UwbRange*>> by_anchor;
+  std::map<int, std::vector<const messages::UwbRange*>> by_anchor;
   for (const auto& r : ranges) {
     if (!(std::isfinite(r.t) && r.t >= 0.0 && r.t < 9.2e9)) throw std::invalid_argument(cat("write_hanyang_case: time ", r.t, " s"));
     if (!(r.range_m >= 0.0 && r.range_m <= 1000.0)) throw std::invalid_argument(cat("write_hanyang_case: range ", r.range_m, " m"));
@@ -231,7 +231,7 @@ inline void write_hanyang_case(const std::filesystem::path& dir, std::span<const
     const fs::path path = dir / cat('A', id, ".csv");
     std::ofstream os(path);
     os << "%time,field.stamp,field.id,field.x,field.y,field.z,field.distanceFromTag,field.rssi,field.rssi_fp\n";
-    for (const UwbRange* r : list) {
+    for (const messages::UwbRange* r : list) {
       const long long t_ns = std::llround(r->t * 1e9);
       power(r->rssi_dbm, rssi, sizeof rssi);
       power(r->rssi_first_path_dbm, fp, sizeof fp);

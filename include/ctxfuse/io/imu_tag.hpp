@@ -19,7 +19,7 @@
 // - Writing: write_imu_csv_and_tag writes both files in the layout read here (imu_tag_write.hpp).
 #pragma once
 
-#include <ctxfuse/io/messages.hpp>
+#include <ctxfuse/messages/sensors.hpp>
 #include <ctxfuse/io/text.hpp>
 #include <ctxfuse/io/time_tag.hpp>
 
@@ -257,15 +257,15 @@ struct ImuConversion {
 
 /// Samples in SI units in the IMU's axes (rad/s, m/s^2), rates not increments. `mapping`,
 /// when given, receives how the ticks were mapped to time.
-inline std::vector<ImuSample> to_imu_samples(const ImuCsvLog& log, const TimeTag& tag, const ImuConversion& opt = {},
+inline std::vector<messages::ImuSample> to_imu_samples(const ImuCsvLog& log, const TimeTag& tag, const ImuConversion& opt = {},
                                              ImuTimeMapping* mapping = nullptr) {
   const ImuClock clock(log, tag, opt.implausible_scale);
   if (mapping) *mapping = clock.mapping();
   constexpr double rad_per_deg = std::numbers::pi / 180.0;
-  std::vector<ImuSample> out;
+  std::vector<messages::ImuSample> out;
   out.reserve(log.records.size());
   for (const auto& r : log.records) {
-    ImuSample s;
+    messages::ImuSample s;
     s.t = clock(r.tick_ms) + opt.delay_s;
     s.gyro = r.gyro_dps * rad_per_deg;
     s.accel = r.accel_g * opt.g_mps2;

@@ -101,7 +101,7 @@ inline void write_imu_csv_and_tag(const std::filesystem::path& csv_path, std::sp
 /// The same from SI samples (rates, not increments: gyro [rad/s], accel [m/s^2]) in the IMU's
 /// axes: sample i reached the logger at samples[i].t (GPST), its IMU tick is ticks_ms[i].
 /// `g_mps2` is the unit the accelerations are written in, as ImuConversion reads them.
-inline void write_imu_csv_and_tag(const std::filesystem::path& csv_path, std::span<const ImuSample> samples,
+inline void write_imu_csv_and_tag(const std::filesystem::path& csv_path, std::span<const messages::ImuSample> samples,
                                   std::span<const std::int64_t> ticks_ms, double start_time,
                                   const ImuCsvWriteOptions& opt = {}, double g_mps2 = 9.80665) {
   if (ticks_ms.size() != samples.size())

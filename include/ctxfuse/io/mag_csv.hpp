@@ -17,7 +17,7 @@
 // skipped and counted in MagCsvReadStats.
 #pragma once
 
-#include <ctxfuse/io/messages.hpp>
+#include <ctxfuse/messages/sensors.hpp>
 #include <ctxfuse/io/text.hpp>
 
 #include <filesystem>
@@ -33,10 +33,10 @@ struct MagCsvReadStats {
   bool skipped_partial_last_line = false;
 };
 
-inline std::vector<MagSample> read_mag_csv(const std::filesystem::path& path, MagCsvReadStats* stats = nullptr) {
+inline std::vector<messages::MagSample> read_mag_csv(const std::filesystem::path& path, MagCsvReadStats* stats = nullptr) {
   TextFile file(path);
   Fields f(file.name());
-  std::vector<MagSample> out;
+  std::vector<messages::MagSample> out;
   std::string_view line;
   bool header = false;
   while (file.next(line)) {
@@ -52,7 +52,7 @@ inline std::vector<MagSample> read_mag_csv(const std::filesystem::path& path, Ma
     }
     f.split(line, file.line_number(), Separator::comma);
     f.expect_count(4);
-    MagSample m;
+    messages::MagSample m;
     m.t = f.real(0);
     for (int k = 0; k < 3; ++k) m.field_ut[k] = f.real(static_cast<std::size_t>(1 + k));
     if (!out.empty() && !(m.t > out.back().t))

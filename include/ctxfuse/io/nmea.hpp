@@ -33,7 +33,7 @@
 #include <system_error>
 #include <vector>
 
-namespace ctxfuse::features::nmea {
+namespace ctxfuse::io::nmea {
 
 enum class GnssSystem { gps = 1, glonass = 2, galileo = 3, beidou = 4, qzss = 5, unknown = 9 };
 
@@ -402,4 +402,4 @@ inline double horizontal_distance_m(double lat1_deg, double lon1_deg, double lat
   return std::hypot(north, east);
 }
 
-}  // namespace ctxfuse::features::nmea
+}  // namespace ctxfuse::io::nmea

@@ -52,7 +52,7 @@
 #include <utility>
 #include <vector>
 
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 
 namespace ctxfuse::io {
 
@@ -61,13 +61,13 @@ namespace ctxfuse::io {
 template <class Msg>
 inline constexpr bool kSharedStamps = false;
 template <>
-inline constexpr bool kSharedStamps<UwbRange> = true;
+inline constexpr bool kSharedStamps<messages::UwbRange> = true;
 
 /// Two messages of a shared-stamp stream that are the same measurement delivered twice (in
 /// other streams the stamp alone identifies a measurement: an equal stamp is `repeated`).
 template <class Msg>
 bool same_measurement(const Msg& a, const Msg& b) {
-  if constexpr (std::is_same_v<Msg, UwbRange>)
+  if constexpr (std::is_same_v<Msg, messages::UwbRange>)
     return a.t == b.t && a.anchor_id == b.anchor_id;
   else
     return a.t == b.t;
@@ -197,11 +197,11 @@ class Cursor {
 }  // namespace detail
 
 template <class Handler, class Tamper, class... Msgs>
-ReplayReport<sizeof...(Msgs)> replay_tampered(Handler& handler, Tamper tamper, std::span<const ImuSample> imu,
+ReplayReport<sizeof...(Msgs)> replay_tampered(Handler& handler, Tamper tamper, std::span<const messages::ImuSample> imu,
                                               std::span<const Msgs>... streams) {
   constexpr std::size_t N = sizeof...(Msgs);
   ReplayReport<N> report;
-  detail::Cursor<ImuSample> imu_cursor(imu);
+  detail::Cursor<messages::ImuSample> imu_cursor(imu);
   std::tuple<detail::Cursor<Msgs>...> cursors{detail::Cursor<Msgs>(streams)...};
   imu_cursor.advance(tamper, report.imu);
   [&]<std::size_t... K>(std::index_sequence<K...>) {
@@ -209,7 +209,7 @@ ReplayReport<sizeof...(Msgs)> replay_tampered(Handler& handler, Tamper tamper, s
   }(std::make_index_sequence<N>{});
 
   const bool have_imu = !imu.empty();
-  std::optional<ImuSample> held;  // the IMU sample in force
+  std::optional<messages::ImuSample> held;  // the IMU sample in force
   double now = -std::numeric_limits<double>::infinity();
   auto propagate_to = [&](double t) {
     if (held && t > now) {
@@ -238,16 +238,16 @@ ReplayReport<sizeof...(Msgs)> replay_tampered(Handler& handler, Tamper tamper, s
 
     if (imu_cursor.head() && t_imu <= t_meas) {
       propagate_to(t_imu);
-      const ImuSample sample = *imu_cursor.head();
+      const messages::ImuSample sample = *imu_cursor.head();
       imu_cursor.accept();
       ++report.imu.delivered;
       if constexpr (requires { handler.on(sample); }) handler.on(sample);
       imu_cursor.advance(tamper, report.imu);
       held = sample;
       // Increments: the next sample's mean rate is what acts until its stamp.
-      if (const ImuSample* next = imu_cursor.head(); next && next->increments) {
+      if (const messages::ImuSample* next = imu_cursor.head(); next && next->increments) {
         const double dt = next->t - sample.t;
-        held = ImuSample{sample.t, next->gyro / dt, next->accel / dt, false};
+        held = messages::ImuSample{sample.t, next->gyro / dt, next->accel / dt, false};
       } else if (sample.increments) {
         held.reset();  // the last increment sample: nothing acts after it
       }
@@ -281,7 +281,7 @@ ReplayReport<sizeof...(Msgs)> replay_tampered(Handler& handler, Tamper tamper, s
 
 /// Without fault injection.
 template <class Handler, class... Msgs>
-ReplayReport<sizeof...(Msgs)> replay(Handler& handler, std::span<const ImuSample> imu, std::span<const Msgs>... streams) {
+ReplayReport<sizeof...(Msgs)> replay(Handler& handler, std::span<const messages::ImuSample> imu, std::span<const Msgs>... streams) {
   return replay_tampered(handler, NoTamper{}, imu, streams...);
 }
 

@@ -1,5 +1,5 @@
 // Reader of RTKLIB solution files (.pos) in the lat/lon/height format with GPST calendar time
-// ("yyyy/mm/dd hh:mm:ss.sss"), and their conversion to io::GnssFix.
+// ("yyyy/mm/dd hh:mm:ss.sss"), and their conversion to messages::GnssFix.
 //
 // - The column layout comes from the last header line, "%  GPST  latitude(deg) ...": RTKLIB
 //   drops the standard-deviation and velocity columns depending on its output options, and
@@ -19,7 +19,7 @@
 //   velocities 5 [m/s] and their sd 5); a file the reader takes back unchanged to those digits.
 #pragma once
 
-#include <ctxfuse/io/messages.hpp>
+#include <ctxfuse/messages/sensors.hpp>
 #include <ctxfuse/io/text.hpp>
 
 #include <Eigen/Core>
@@ -47,12 +47,12 @@ struct RtklibPosRecord {
   double height_m = 0.0;  // as the file gives it (ellipsoidal or above MSL: the writer's choice)
   int q = 0;              // 1 fix, 2 float, 3 SBAS, 4 DGPS, 5 single, 6 PPP, 7 dead reckoning
   int ns = 0;
-  double sdn_m = kUnknown, sde_m = kUnknown, sdu_m = kUnknown;
-  double sdne_m = kUnknown, sdeu_m = kUnknown, sdun_m = kUnknown;  // signed square roots
-  double age_s = kUnknown, ratio = kUnknown;
-  double vn_mps = kUnknown, ve_mps = kUnknown, vu_mps = kUnknown;
-  double sdvn_mps = kUnknown, sdve_mps = kUnknown, sdvu_mps = kUnknown;
-  double sdvne_mps = kUnknown, sdveu_mps = kUnknown, sdvun_mps = kUnknown;
+  double sdn_m = messages::kUnknown, sde_m = messages::kUnknown, sdu_m = messages::kUnknown;
+  double sdne_m = messages::kUnknown, sdeu_m = messages::kUnknown, sdun_m = messages::kUnknown;  // signed square roots
+  double age_s = messages::kUnknown, ratio = messages::kUnknown;
+  double vn_mps = messages::kUnknown, ve_mps = messages::kUnknown, vu_mps = messages::kUnknown;
+  double sdvn_mps = messages::kUnknown, sdve_mps = messages::kUnknown, sdvu_mps = messages::kUnknown;
+  double sdvne_mps = messages::kUnknown, sdveu_mps = messages::kUnknown, sdvun_mps = messages::kUnknown;
   std::size_t line = 0;
 
   bool has_position_sd() const { return std::isfinite(sdn_m) && std::isfinite(sde_m) && std::isfinite(sdu_m); }
@@ -187,11 +187,11 @@ inline double signed_square(double s) { return s * std::abs(s); }
 /// The epoch as a fix: geodetic (lat, lon [deg], height [m] as written), covariance in east /
 /// north / up from the sd columns (NaN when the file has none, so that a filter refuses it
 /// rather than trust an invented accuracy), velocity east/north/up when the file has it.
-inline GnssFix to_gnss_fix(const RtklibPosRecord& r) {
+inline messages::GnssFix to_gnss_fix(const RtklibPosRecord& r) {
   using detail::signed_square;
-  GnssFix fix;
+  messages::GnssFix fix;
   fix.t = r.t;
-  fix.frame = PositionFrame::geodetic;
+  fix.frame = messages::PositionFrame::geodetic;
   fix.position = {r.latitude_deg, r.longitude_deg, r.height_m};
   const double ne = std::isfinite(r.sdne_m) ? signed_square(r.sdne_m) : 0.0;
   const double eu = std::isfinite(r.sdeu_m) ? signed_square(r.sdeu_m) : 0.0;
@@ -201,7 +201,7 @@ inline GnssFix to_gnss_fix(const RtklibPosRecord& r) {
         ne, r.sdn_m * r.sdn_m, un,         //
         eu, un, r.sdu_m * r.sdu_m;
   else
-    fix.cov.setConstant(kUnknown);
+    fix.cov.setConstant(messages::kUnknown);
   if (r.has_velocity()) {
     fix.velocity = Eigen::Vector3d(r.ve_mps, r.vn_mps, r.vu_mps);
     const double vne = std::isfinite(r.sdvne_mps) ? signed_square(r.sdvne_mps) : 0.0;
@@ -212,15 +212,15 @@ inline GnssFix to_gnss_fix(const RtklibPosRecord& r) {
           vne, r.sdvn_mps * r.sdvn_mps, vun,                  //
           veu, vun, r.sdvu_mps * r.sdvu_mps;
     else
-      fix.velocity_cov.setConstant(kUnknown);
+      fix.velocity_cov.setConstant(messages::kUnknown);
   }
-  fix.quality = r.q >= 1 && r.q <= 6 ? static_cast<FixQuality>(r.q) : FixQuality::unknown;
+  fix.quality = r.q >= 1 && r.q <= 6 ? static_cast<messages::FixQuality>(r.q) : messages::FixQuality::unknown;
   fix.satellites_used = r.ns;
   return fix;
 }
 
-inline std::vector<GnssFix> to_gnss_fixes(const RtklibPosFile& file) {
-  std::vector<GnssFix> out;
+inline std::vector<messages::GnssFix> to_gnss_fixes(const RtklibPosFile& file) {
+  std::vector<messages::GnssFix> out;
   out.reserve(file.records.size());
   for (const auto& r : file.records) out.push_back(to_gnss_fix(r));
   return out;
@@ -234,9 +234,9 @@ struct RtklibPosWriteOptions {
 };
 
 /// The fix as an epoch of a .pos file: the inverse of to_gnss_fix. The fix must be geodetic
-/// (degrees); age and ratio, which a GnssFix does not carry, are 0.
-inline RtklibPosRecord to_rtklib_pos_record(const GnssFix& fix) {
-  if (fix.frame != PositionFrame::geodetic)
+/// (degrees); age and ratio, which a messages::GnssFix does not carry, are 0.
+inline RtklibPosRecord to_rtklib_pos_record(const messages::GnssFix& fix) {
+  if (fix.frame != messages::PositionFrame::geodetic)
     throw std::invalid_argument("to_rtklib_pos_record: the fix is not geodetic (lat/lon/height)");
   auto root = [](double c) { return std::copysign(std::sqrt(std::abs(c)), c); };
   RtklibPosRecord r;
@@ -332,7 +332,7 @@ inline void write_rtklib_pos(const std::filesystem::path& path, std::span<const 
 }
 
 /// The fixes through to_rtklib_pos_record; velocity columns only when every fix has one.
-inline void write_rtklib_pos(const std::filesystem::path& path, std::span<const GnssFix> fixes,
+inline void write_rtklib_pos(const std::filesystem::path& path, std::span<const messages::GnssFix> fixes,
                              RtklibPosWriteOptions opt = {}) {
   std::vector<RtklibPosRecord> records;
   records.reserve(fixes.size());

@@ -25,7 +25,7 @@
 #include <string_view>
 #include <vector>
 
-namespace ctxfuse::features {
+namespace ctxfuse::io {
 
 /// Kept for the users of this reader's first version: its errors are the io readers' ones.
 using UwbDataError = io::ParseError;
@@ -157,4 +157,4 @@ inline std::vector<UwbStaticRange> read_uwb_static_dataset(const std::filesystem
   return out;
 }
 
-}  // namespace ctxfuse::features
+}  // namespace ctxfuse::io

@@ -1,4 +1,4 @@
-// From IMU samples in the IMU's own axes (io::ImuSample: rates or increments) to the body-frame
+// From IMU samples in the IMU's own axes (messages::ImuSample: rates or increments) to the body-frame
 // increments the geodetic INS predicts with (models/ins_nav.hpp): the mounting rotation and the
 // logging delay applied on input, dt from the time stamps, and the previous increment kept for
 // coning and sculling. A refused sample (non-finite or non-increasing stamp, non-finite or
@@ -9,7 +9,7 @@
 #include <limits>
 
 #include "ctxfuse/core/status.hpp"
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/models/ins_nav.hpp"
 
 namespace ctxfuse::models {
@@ -29,7 +29,7 @@ struct ImuInput {
   double max_accel = 400.0;   // [m/s^2]
 
   /// The sample with its stamp corrected by the delay (for a replay that merges streams by time).
-  io::ImuSample apply_delay(io::ImuSample s) const {
+  messages::ImuSample apply_delay(messages::ImuSample s) const {
     s.t += delay_s;
     return s;
   }
@@ -48,7 +48,7 @@ struct ImuInput {
   /// so it is used when the next one arrives; an increment sample covers the interval that ends
   /// at its stamp. The first sample only starts the clock (Problem::time_not_set); `dt` is the
   /// step the increments cover.
-  Status next(const io::ImuSample& s, BodyIncrements& out, double& dt) {
+  Status next(const messages::ImuSample& s, BodyIncrements& out, double& dt) {
     const double t = s.t + delay_s;
     if (!std::isfinite(t)) return Status::invalid(Problem::non_finite_dt);
     if (!all_finite(s.gyro) || !all_finite(s.accel)) return Status::invalid(Problem::non_finite_input);
@@ -99,7 +99,7 @@ struct ImuInput {
   }
 
   double last_t_ = std::numeric_limits<double>::quiet_NaN();
-  io::ImuSample last_{};
+  messages::ImuSample last_{};
   Eigen::Vector3d prev_dtheta_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d prev_dv_ = Eigen::Vector3d::Zero();
   bool has_previous_ = false;

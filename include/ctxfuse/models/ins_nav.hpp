@@ -14,14 +14,14 @@
 // Intended use with io/replay.hpp (a later pipeline builds this; nothing here reads files):
 //   using Ins20 = Augmented<InsNavModel<>, StateBlock<"mount", 2>, StateBlock<"lever", 3>>;  // ins_augment.hpp
 //   ImuInput imu{mounting_rotation(r, p, y), delay};   // ins_input.hpp
-//   Before the replay, shift each io::ImuSample's stamp with imu.apply_delay; start the filter
-//   from a DynamicAligner (alignment.hpp) fed with the io::GnssFix positions. Handler:
+//   Before the replay, shift each messages::ImuSample's stamp with imu.apply_delay; start the filter
+//   from a DynamicAligner (alignment.hpp) fed with the messages::GnssFix positions. Handler:
 //     propagate(u, dt):  BodyIncrements inc;
 //                        if (imu.from_rates(u.gyro, u.accel, dt, inc).accepted())
 //                          eskf::predict(model, belief, inc, dt, opts, &F);  rts.predicted(F);
-//     on(io::ImuSample): StaticDetector::push(raw rates); ZeroVelocity + Heading (ZIHR) while
+//     on(messages::ImuSample): StaticDetector::push(raw rates); ZeroVelocity + Heading (ZIHR) while
 //                        static, NonHolonomic[WithSpeed] while moving (ins_updates.hpp)
-//     on(io::GnssFix):   GnssGeodeticPosition (R from geodetic_position_noise of the fix's
+//     on(messages::GnssFix):   GnssGeodeticPosition (R from geodetic_position_noise of the fix's
 //                        ned_from_enu_cov) and GnssVelocity, each with a ChiSquareGate; then
 //                        rts.record(t, prior, belief) (filters/rts.hpp) for the smoother.
 // Time steps come from the stamps (irregular sampling at any rate is fine); a dt <= 0 or a

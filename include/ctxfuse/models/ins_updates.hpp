@@ -23,7 +23,7 @@ inline Eigen::Matrix3d geodetic_position_noise(const Eigen::Vector3d& llh, const
   return D * cov_ned * D;
 }
 
-/// A covariance given in east/north/up (io::GnssFix::cov) in north/east/down axes.
+/// A covariance given in east/north/up (messages::GnssFix::cov) in north/east/down axes.
 inline Eigen::Matrix3d ned_from_enu_cov(const Eigen::Matrix3d& enu) {
   Eigen::Matrix3d T;
   T << 0, 1, 0, 1, 0, 0, 0, 0, -1;

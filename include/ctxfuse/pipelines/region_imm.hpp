@@ -1,7 +1,7 @@
 // The region paper's whole pipeline (paper A in docs): per-epoch GNSS features -> PSO-SVM +
 // HMM + joint vote -> recognised region -> region-aware IMM over three planar IMU-driven EKF
 // sub-models, and the baselines it is compared with (GNSS alone, UWB alone, each sub-model
-// alone, federated Kalman filter, plain IMM). It runs on sensor streams (io::SensorLog), from a
+// alone, federated Kalman filter, plain IMM). It runs on sensor streams (messages::SensorLog), from a
 // recording or the simulator alike, and never reads truth:
 //   region_imm/settings.hpp    the one set of settings, the estimators, recognised regions
 //   region_imm/recogniser.hpp  features, training from labelled logs, recognition

@@ -28,9 +28,9 @@ namespace ctxfuse::sim {
 inline void write_platform_recording(const PlatformRun& run, const std::filesystem::path& dir) {
   namespace fs = std::filesystem;
   fs::create_directories(dir / "reference");
-  io::write_rtklib_pos(dir / "gnss.pos", std::span<const io::GnssFix>(run.fixes));
-  io::write_rtklib_pos(dir / "reference" / "truth.pos", std::span<const io::GnssFix>(run.reference));
-  std::vector<io::ImuSample> samples;
+  io::write_rtklib_pos(dir / "gnss.pos", std::span<const messages::GnssFix>(run.fixes));
+  io::write_rtklib_pos(dir / "reference" / "truth.pos", std::span<const messages::GnssFix>(run.reference));
+  std::vector<messages::ImuSample> samples;
   std::vector<std::int64_t> ticks;
   samples.reserve(run.imu.size());
   ticks.reserve(run.imu.size());
@@ -39,7 +39,7 @@ inline void write_platform_recording(const PlatformRun& run, const std::filesyst
     ticks.push_back(s.tick_ms);
   }
   const double start = run.imu.empty() ? run.config.gps_start_s : run.imu.front().t_gps;
-  io::write_imu_csv_and_tag(dir / "imu.csv", std::span<const io::ImuSample>(samples), std::span<const std::int64_t>(ticks), start);
+  io::write_imu_csv_and_tag(dir / "imu.csv", std::span<const messages::ImuSample>(samples), std::span<const std::int64_t>(ticks), start);
 
   // The UWB site: the device 1 m above the ground (the Hanyang protocol's tag height).
   constexpr double kTagHeight = 1.0;

@@ -26,7 +26,7 @@
 #include <utility>
 #include <vector>
 
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/models/earth.hpp"
 #include "ctxfuse/sim/random.hpp"
 #include "ctxfuse/sim/route.hpp"
@@ -82,8 +82,8 @@ struct RecordedImuSample {
 struct PlatformRun {
   PlatformRunConfig config;
   std::vector<RecordedImuSample> imu;
-  std::vector<io::GnssFix> fixes;      // geodetic [deg, deg, m], covariances ENU, velocity ENU
-  std::vector<io::GnssFix> reference;  // truth at every GNSS epoch, RTK-fixed quality, 1 mm sigma
+  std::vector<messages::GnssFix> fixes;      // geodetic [deg, deg, m], covariances ENU, velocity ENU
+  std::vector<messages::GnssFix> reference;  // truth at every GNSS epoch, RTK-fixed quality, 1 mm sigma
   double moving_off_s = 0.0;           // seconds after the start at which the platform moves
   /// The device's true path at 100 Hz: GPST [s] and ENU position [m] about the origin (the
   /// UWB site of sim/platform_recording.hpp ranges to it).
@@ -242,21 +242,21 @@ inline PlatformRun simulate_platform_run(const PlatformRunConfig& c) {
     const Eigen::Vector3d p = pos(te), v = vel(te);
     Eigen::Vector3d noise(c.fixed_sigma_m * g.normal(), c.fixed_sigma_m * g.normal(), 2.0 * c.fixed_sigma_m * g.normal());
     if (is_float) noise.head<2>() += float_err;
-    io::GnssFix f;
+    messages::GnssFix f;
     f.t = c.gps_start_s + te;
-    f.frame = io::PositionFrame::geodetic;
+    f.frame = messages::PositionFrame::geodetic;
     f.position = llh_deg(p + noise);
     f.cov = Eigen::Vector3d(c.reported_sigma_m, c.reported_sigma_m, 2.0 * c.reported_sigma_m).cwiseAbs2().asDiagonal();
-    f.quality = is_float ? io::FixQuality::floating : io::FixQuality::fixed;
+    f.quality = is_float ? messages::FixQuality::floating : messages::FixQuality::fixed;
     f.satellites_used = 18;
     Eigen::Vector3d vn(c.velocity_sigma_mps * g.normal(), c.velocity_sigma_mps * g.normal(), c.velocity_sigma_mps * g.normal());
     f.velocity = v + vn;
     f.velocity_cov = Eigen::Matrix3d::Identity() * c.velocity_sigma_mps * c.velocity_sigma_mps;
     run.fixes.push_back(f);
-    io::GnssFix r = f;
+    messages::GnssFix r = f;
     r.position = llh_deg(p);
     r.cov = Eigen::Matrix3d::Identity() * 1e-6;
-    r.quality = io::FixQuality::fixed;
+    r.quality = messages::FixQuality::fixed;
     r.velocity = v;
     run.reference.push_back(r);
   }

@@ -1,50 +1,50 @@
 // The simulated drive as what a recording would hold: sensor streams without truth
-// (io::SensorLog, what a pipeline runs on) and the truth and labels apart (eval::TruthLog,
+// (messages::SensorLog, what a pipeline runs on) and the truth and labels apart (sim::TruthLog,
 // what scoring reads). The simulator is one producer of streams among the readers.
 #pragma once
 
 #include <vector>
 
-#include "ctxfuse/eval/truth.hpp"
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/sim/drive.hpp"
+#include "ctxfuse/sim/records.hpp"
 
 namespace ctxfuse::sim {
 
 /// The receiver's epoch as a message: the satellites it tracked and its DOPs (NaN when the
 /// simulator reports -1: fewer than four satellites).
-inline io::SatEpoch sat_epoch(const Drive& d, const GnssEpoch& e) {
-  io::SatEpoch out;
+inline messages::SatEpoch sat_epoch(const Drive& d, const GnssEpoch& e) {
+  messages::SatEpoch out;
   out.t = e.t;
   for (const auto& s : d.satellites_of(e)) out.sats.push_back({s.sat_id, s.elevation_deg, s.azimuth_deg, s.cn0_dbhz});
-  out.pdop = e.pdop < 0.0 ? io::kUnknown : e.pdop;
-  out.hdop = e.hdop < 0.0 ? io::kUnknown : e.hdop;
+  out.pdop = e.pdop < 0.0 ? messages::kUnknown : e.pdop;
+  out.hdop = e.hdop < 0.0 ? messages::kUnknown : e.hdop;
   return out;
 }
 
 /// A fix as the receiver reports it: position and its reported standard deviations.
-inline io::GnssFix gnss_fix(const GnssEpoch& e) {
-  io::GnssFix f;
+inline messages::GnssFix gnss_fix(const GnssEpoch& e) {
+  messages::GnssFix f;
   f.t = e.t;
   f.position = e.position;
-  f.frame = io::PositionFrame::local_enu;
+  f.frame = messages::PositionFrame::local_enu;
   f.cov = Eigen::Vector3d(e.std_horizontal_m * e.std_horizontal_m, e.std_horizontal_m * e.std_horizontal_m,
                           e.std_vertical_m * e.std_vertical_m)
               .asDiagonal();
-  f.quality = io::FixQuality::single;
+  f.quality = messages::FixQuality::single;
   f.satellites_used = e.num_sats;
   return f;
 }
 
-inline io::ImuSample imu_sample(const ImuSample& s) { return {s.t, s.gyro, s.accel, false}; }
+inline messages::ImuSample imu_sample(const ImuSample& s) { return {s.t, s.gyro, s.accel, false}; }
 
-inline io::UwbRange uwb_range(const UwbRange& r) {
+inline messages::UwbRange uwb_range(const UwbRange& r) {
   return {r.t, r.anchor_id, r.anchor_position, r.range_m, r.rssi_dbm, r.rssi_first_path_dbm};
 }
 
 /// Every sensor stream of the drive, without truth.
-inline io::SensorLog sensor_log(const Drive& d) {
-  io::SensorLog log;
+inline messages::SensorLog sensor_log(const Drive& d) {
+  messages::SensorLog log;
   log.imu.reserve(d.imu.size());
   for (const auto& s : d.imu) log.imu.push_back(imu_sample(s));
   for (const auto& e : d.gnss) {
@@ -59,8 +59,8 @@ inline io::SensorLog sensor_log(const Drive& d) {
 }
 
 /// The drive's truth and labels.
-inline eval::TruthLog truth_log(const Drive& d) {
-  eval::TruthLog out;
+inline TruthLog truth_log(const Drive& d) {
+  TruthLog out;
   out.truth = d.truth;
   for (const auto& r : d.uwb) out.uwb.push_back({r.t, r.anchor_id, r.nlos, r.true_range_m, r.nlos_bias_m});
   for (const auto& s : d.sats) out.sats.push_back({s.t, s.sat_id, s.line_of_sight});

@@ -1,7 +1,7 @@
 // A simulated UWB site in the Hanyang layout: given the tag's true path (time-stamped 3-D
 // positions of its antenna), fixed anchors, each ranging at its own rate, reports raw or the
 // mean of the last n raw ranges, per-anchor constant biases, Gaussian noise and optionally an
-// NLOS excess, `simulate_uwb_site` makes the io::UwbRange streams; io::write_hanyang_case
+// NLOS excess, `simulate_uwb_site` makes the messages::UwbRange streams; io::write_hanyang_case
 // (io/hanyang_uwb.hpp) writes them and `hanyang_reference` in the dataset's files, so that
 // `ctxfuse run uwb` reads a simulated case exactly as a recorded one.
 //
@@ -31,7 +31,7 @@
 #include <vector>
 
 #include "ctxfuse/io/hanyang_uwb.hpp"
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/sim/random.hpp"
 
 namespace ctxfuse::sim {
@@ -81,7 +81,7 @@ inline Eigen::Vector3d position_at(std::span<const PositionSample> path, double 
 /// std::invalid_argument for a path with fewer than two samples or times that do not
 /// increase, an anchor rate outside (0, 1000] Hz, a negative phase, a non-finite value, a
 /// noise sigma or jitter below 0, average_samples outside 1..100, or two anchors with one id.
-inline std::vector<io::UwbRange> simulate_uwb_site(std::span<const PositionSample> path, const UwbSiteConfig& c) {
+inline std::vector<messages::UwbRange> simulate_uwb_site(std::span<const PositionSample> path, const UwbSiteConfig& c) {
   if (path.size() < 2) throw std::invalid_argument("simulate_uwb_site: the path needs two samples");
   for (std::size_t i = 0; i < path.size(); ++i)
     if (!std::isfinite(path[i].t) || !path[i].position.allFinite() || (i > 0 && !(path[i].t > path[i - 1].t)))
@@ -100,7 +100,7 @@ inline std::vector<io::UwbRange> simulate_uwb_site(std::span<const PositionSampl
       if (c.anchors[b].id == an.id) throw std::invalid_argument("simulate_uwb_site: anchor id " + std::to_string(an.id) + " twice");
   }
   Rng rng(c.seed, Stream::uwb);
-  std::vector<io::UwbRange> out;
+  std::vector<messages::UwbRange> out;
   const double t0 = path.front().t, t1 = path.back().t;
   std::vector<double> raw;
   for (const SiteAnchor& an : c.anchors) {
@@ -118,7 +118,7 @@ inline std::vector<io::UwbRange> simulate_uwb_site(std::span<const PositionSampl
       const std::size_t n = std::min(raw.size(), static_cast<std::size_t>(c.average_samples));
       double mean = 0.0;
       for (std::size_t i = raw.size() - n; i < raw.size(); ++i) mean += raw[i];
-      io::UwbRange u;
+      messages::UwbRange u;
       u.t = t;
       u.anchor_id = an.id;
       u.anchor_position = an.position;
@@ -128,7 +128,7 @@ inline std::vector<io::UwbRange> simulate_uwb_site(std::span<const PositionSampl
       out.push_back(u);
     }
   }
-  std::stable_sort(out.begin(), out.end(), [](const io::UwbRange& a, const io::UwbRange& b) {
+  std::stable_sort(out.begin(), out.end(), [](const messages::UwbRange& a, const messages::UwbRange& b) {
     return a.t != b.t ? a.t < b.t : a.anchor_id < b.anchor_id;
   });
   return out;

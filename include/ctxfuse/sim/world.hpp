@@ -18,31 +18,9 @@
 #include <numbers>
 #include <vector>
 
+#include "ctxfuse/sim/records.hpp"
+
 namespace ctxfuse::sim {
-
-/// Region labels of the region-recognition paper (A), zero-based.
-enum class Region : std::uint8_t { outdoor = 0, transition = 1, indoor = 2 };
-/// Scene labels of the scene-detection paper (B).
-enum class Scene : std::uint8_t { open = 0, obstructed = 1, indoor = 2 };
-inline constexpr int kRegionCount = 3;
-inline constexpr int kSceneCount = 3;
-
-inline const char* region_name(Region r) {
-  switch (r) {
-    case Region::outdoor: return "outdoor";
-    case Region::transition: return "transition";
-    case Region::indoor: return "indoor";
-  }
-  return "?";
-}
-inline const char* scene_name(Scene s) {
-  switch (s) {
-    case Scene::open: return "open";
-    case Scene::obstructed: return "obstructed";
-    case Scene::indoor: return "indoor";
-  }
-  return "?";
-}
 
 struct Polygon {
   std::vector<Eigen::Vector2d> vertices;  // ENU x/y, metres, either winding

@@ -27,7 +27,7 @@
 
 #include "ctxfuse/filters/eskf.hpp"
 #include "ctxfuse/filters/rts.hpp"
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/models/alignment.hpp"
 #include "ctxfuse/models/held_input.hpp"
 #include "ctxfuse/models/ins_augment.hpp"
@@ -101,7 +101,7 @@ class ForwardPass {
     t_span_ = t_last > t_first ? t_last - t_first : 1.0;
   }
 
-  void propagate(const io::ImuSample& u, double dt) {
+  void propagate(const messages::ImuSample& u, double dt) {
     models::BodyIncrements inc;
     if (!aligned_) {
       // Lost (below): a new sample the strapdown takes means the IMU is back.
@@ -115,7 +115,7 @@ class ForwardPass {
     // A refused sample (non-finite, absurd) is replaced by the last accepted one over its
     // interval (models/held_input.hpp): time and covariance advance.
     const models::InputUse use =
-        held_imu_.apply(u, [&](const io::ImuSample& s) { return imu_.from_rates(s.gyro, s.accel, dt, inc); });
+        held_imu_.apply(u, [&](const messages::ImuSample& s) { return imu_.from_rates(s.gyro, s.accel, dt, inc); });
     if (use != models::InputUse::taken) ++counts_.imu_refused;
     if (use == models::InputUse::lost) return;
     // Time no sample measured: a refused sample's interval, and a sample's beyond imu_hold_s
@@ -147,7 +147,7 @@ class ForwardPass {
     ++counts_.imu_steps;
   }
 
-  void on(const io::ImuSample& u) {
+  void on(const messages::ImuSample& u) {
     const Eigen::Vector3d w = imu_.body_from_imu * u.gyro, f = imu_.body_from_imu * u.accel;
     if (!w.allFinite() || !f.allFinite()) return;
     gyro_body_ = w;
@@ -190,7 +190,7 @@ class ForwardPass {
     }
   }
 
-  void on(const io::MagSample& m) {
+  void on(const messages::MagSample& m) {
     if (!aligned_ || !c_.mag) return;
     const Eigen::Matrix3d C = nav_part<Model>(belief_.nominal).template get<"theta">().toRotationMatrix();
     const Eigen::Vector3d b = imu_.body_from_imu * m.field_ut;
@@ -201,10 +201,10 @@ class ForwardPass {
     }
   }
 
-  void on(const io::GnssFix& fix) {
+  void on(const messages::GnssFix& fix) {
     const bool kept = decimator_.keep(fix.t);
     const bool withheld = in_any(windows_, fix.t);
-    const bool use = kept && !withheld && fix.frame == io::PositionFrame::geodetic;
+    const bool use = kept && !withheld && fix.frame == messages::PositionFrame::geodetic;
     counts_.gnss_decimated += kept ? 0 : 1;
     counts_.gnss_withheld += kept && withheld ? 1 : 0;
     const Eigen::Vector3d z(fix.position(0) * kDeg, fix.position(1) * kDeg, fix.position(2));
@@ -357,7 +357,7 @@ class ForwardPass {
 
   /// Offers a used fix to the aligner, in a (north, east) plane about the first fix it holds,
   /// with the receiver's velocity when the fix has one; starts the filter once it aligns.
-  void try_align(const io::GnssFix& fix, const Eigen::Vector3d& z, const Eigen::Matrix3d& cov) {
+  void try_align(const messages::GnssFix& fix, const Eigen::Vector3d& z, const Eigen::Matrix3d& cov) {
     if (!cov.allFinite() || !z.allFinite()) return;
     if (align_empty_) {
       align_origin_ = z;
@@ -411,7 +411,7 @@ class ForwardPass {
   ChiSquareGate gate_;
   Model model_{};
   models::ImuInput imu_;
-  models::HeldInput<io::ImuSample> held_imu_;
+  models::HeldInput<messages::ImuSample> held_imu_;
   models::DynamicAligner align_;
   Eigen::Vector3d align_origin_ = Eigen::Vector3d::Zero();  // geodetic origin of the aligner's (north, east) plane
   models::PlanarAlignment alignment_{};

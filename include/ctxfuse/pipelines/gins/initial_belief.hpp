@@ -12,7 +12,7 @@
 
 #include "ctxfuse/models/earth.hpp"
 #include "ctxfuse/filters/eskf.hpp"
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/models/alignment.hpp"
 #include "ctxfuse/models/ins_augment.hpp"
 #include "ctxfuse/models/ins_motion.hpp"
@@ -51,7 +51,7 @@ inline models::AlignmentOptions alignment_options(const Settings& s) {
 /// static start (none: roll and pitch zero with initial_roll_pitch_sigma_unlevelled); lost:
 /// the belief before an IMU gap, or nullptr at the start.
 template <class Model>
-eskf::Belief<Model> initial_belief(const Settings& s, const models::PlanarAlignment& a, const io::GnssFix& fix,
+eskf::Belief<Model> initial_belief(const Settings& s, const models::PlanarAlignment& a, const messages::GnssFix& fix,
                                    const Eigen::Vector3d& z, const Eigen::Matrix3d& cov, const Eigen::Vector3d& gnss_lever,
                                    const Eigen::Vector3d& nhc_lever, const StaticStats& start, const eskf::Belief<Model>* lost) {
   using S = typename Model::State;

@@ -21,9 +21,9 @@
 namespace ctxfuse::pipelines::gins {
 
 struct Recording {
-  std::vector<io::ImuSample> imu;  // IMU axes, SI units, stamps as logged (no delay applied)
-  std::vector<io::GnssFix> fixes;
-  std::vector<io::MagSample> mag;  // empty without a mag*.csv (io/mag_csv.hpp: IMU axes, own stamps)
+  std::vector<messages::ImuSample> imu;  // IMU axes, SI units, stamps as logged (no delay applied)
+  std::vector<messages::GnssFix> fixes;
+  std::vector<messages::MagSample> mag;  // empty without a mag*.csv (io/mag_csv.hpp: IMU axes, own stamps)
   std::filesystem::path pos_file, imu_file, mag_file;
   io::ImuTimeMapping imu_time;        // how the IMU's ticks became GPST (io/imu_tag.hpp)
   std::size_t imu_partial_lines = 0;  // cut lines the csv reader skipped (a logger's start or stop)
@@ -69,7 +69,7 @@ struct RunOptions {
   double gnss_rate_hz = 0.0;    // 0: every fix
   /// Magnetometer samples (IMU axes, their own stamps: the IMU delay is not added), replayed
   /// with the IMU and fixes; used when constraints.mag is set.
-  std::span<const io::MagSample> mag;
+  std::span<const messages::MagSample> mag;
   bool smooth = false;
   std::function<void(double)> progress;  // fraction of the recording done, now and then
 };
@@ -118,10 +118,10 @@ TrajectoryRow trajectory_row(double t, const eskf::Belief<Model>& b, const Eigen
 }
 
 template <class Model = Nav20>
-RunResult run(std::span<const io::ImuSample> imu_raw, std::span<const io::GnssFix> fixes, const Settings& settings,
+RunResult run(std::span<const messages::ImuSample> imu_raw, std::span<const messages::GnssFix> fixes, const Settings& settings,
               const RunOptions& opt) {
   RunResult out;
-  std::vector<io::ImuSample> imu(imu_raw.begin(), imu_raw.end());
+  std::vector<messages::ImuSample> imu(imu_raw.begin(), imu_raw.end());
   for (auto& s : imu) s.t += opt.installation.imu_delay_s;
   if (!fixes.empty()) out.windows = outage_windows(opt.outages, fixes.front().t, fixes.back().t);
   ForwardPass<Model> pass(settings, opt.installation, opt.constraints, out.windows, opt.gnss_rate_hz);
@@ -132,7 +132,7 @@ RunResult run(std::span<const io::ImuSample> imu_raw, std::span<const io::GnssFi
     pass.reserve(fixes.size() + static_cast<std::size_t>(std::max(0.0, span) * per_s) + 16);
     if (opt.progress) pass.set_progress(opt.progress, imu.front().t, imu.back().t);
   }
-  out.replay = io::replay(pass, std::span<const io::ImuSample>(imu), fixes, opt.mag);
+  out.replay = io::replay(pass, std::span<const messages::ImuSample>(imu), fixes, opt.mag);
   pass.finish();
   out.counts = pass.counts();
   out.static_start = pass.static_start();

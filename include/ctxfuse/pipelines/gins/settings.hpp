@@ -9,7 +9,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 
 namespace ctxfuse::pipelines::gins {
 
@@ -109,13 +109,13 @@ struct Settings {
   double gnss_dgnss_sigma_floor_m = 0.5;
   double gnss_sbas_sigma_floor_m = 1.0;
   double gnss_single_sigma_floor_m = 1.5;
-  double gnss_sigma_floor(io::FixQuality q) const {
+  double gnss_sigma_floor(messages::FixQuality q) const {
     switch (q) {
-      case io::FixQuality::fixed: return gnss_position_sigma_floor_m;
-      case io::FixQuality::ppp: return gnss_ppp_sigma_floor_m;
-      case io::FixQuality::floating: return gnss_float_sigma_floor_m;
-      case io::FixQuality::dgps: return gnss_dgnss_sigma_floor_m;
-      case io::FixQuality::sbas: return gnss_sbas_sigma_floor_m;
+      case messages::FixQuality::fixed: return gnss_position_sigma_floor_m;
+      case messages::FixQuality::ppp: return gnss_ppp_sigma_floor_m;
+      case messages::FixQuality::floating: return gnss_float_sigma_floor_m;
+      case messages::FixQuality::dgps: return gnss_dgnss_sigma_floor_m;
+      case messages::FixQuality::sbas: return gnss_sbas_sigma_floor_m;
       default: return gnss_single_sigma_floor_m;
     }
   }

@@ -28,7 +28,7 @@
 #include "ctxfuse/core/status.hpp"
 #include "ctxfuse/filters/ekf.hpp"
 #include "ctxfuse/filters/fixed_lag_rts.hpp"
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/models/averaged_range.hpp"
 #include "ctxfuse/models/kinematic.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/estimators.hpp"
@@ -109,7 +109,7 @@ class CalibratedRangeEkf {
   }
 
   /// One range at the clock's time (apply_ranges_in_order predicts to its stamp first).
-  Status update(const io::UwbRange& r) {
+  Status update(const messages::UwbRange& r) {
     if (!started_) return Status::invalid(Problem::time_not_set);
     if (const Problem p = range_problem(r, settings_); p != Problem::none) return Status::invalid(p);
     models::AveragedRangeWithBias<L> h;
@@ -134,7 +134,7 @@ class CalibratedRangeEkf {
     }
   }
 
-  Status apply_epoch(std::span<const io::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
+  Status apply_epoch(std::span<const messages::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
     const Status s = apply_ranges_in_order(*this, epoch, attach, statuses);
     if constexpr (Lagged) {
       // The epoch's end is a record too (no update there: prior = posterior), so that the

@@ -26,7 +26,7 @@
 #include "ctxfuse/classify/svm_train.hpp"
 #include "ctxfuse/classify/svm_tune.hpp"
 #include "ctxfuse/features/nlos.hpp"
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/policies.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/settings.hpp"
 
@@ -56,7 +56,7 @@ class NlosClassifier {
   /// Verdict on range r with the platform's current speed; `input` receives the SVM's features
   /// (NaN when the anchor has no previous range). Every range of the run must come through
   /// here, in time order, attached or not: v_u and d_rho are differences of consecutive ranges.
-  RangeVerdict classify(const io::UwbRange& r, double speed_mps, SvmInput* input = nullptr) {
+  RangeVerdict classify(const messages::UwbRange& r, double speed_mps, SvmInput* input = nullptr) {
     RangeVerdict v;
     features::NlosFeatureExtractor* x = extractor_of(r.anchor_id);
     if (!x) return v;

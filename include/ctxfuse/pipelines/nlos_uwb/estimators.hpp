@@ -31,7 +31,7 @@
 #include "ctxfuse/core/layout.hpp"
 #include "ctxfuse/core/status.hpp"
 #include "ctxfuse/filters/ekf.hpp"
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/models/kinematic.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/settings.hpp"
 #include "ctxfuse/policies/gating.hpp"
@@ -73,7 +73,7 @@ inline Status clock_check(bool started, double now, double t) {
 }
 
 /// A range every estimator refuses before use: non-finite, not positive, beyond max_range_m.
-inline Problem range_problem(const io::UwbRange& r, const Settings& s) {
+inline Problem range_problem(const messages::UwbRange& r, const Settings& s) {
   if (!r.anchor_position.allFinite() || !std::isfinite(r.range_m)) return Problem::non_finite_measurement;
   if (!(r.range_m > 0.0 && r.range_m <= s.max_range_m)) return Problem::measurement_out_of_domain;
   return Problem::none;
@@ -83,7 +83,7 @@ inline Problem range_problem(const io::UwbRange& r, const Settings& s) {
 /// statuses[i] its outcome), then the clock to the epoch's last range. A refused prediction
 /// ends the epoch with its status.
 template <class Ekf>
-Status apply_ranges_in_order(Ekf& ekf, std::span<const io::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
+Status apply_ranges_in_order(Ekf& ekf, std::span<const messages::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
   for (std::size_t i = 0; i < epoch.size(); ++i) {
     if (!attach[i]) continue;
     if (const Status p = ekf.predict_to(epoch[i].t); !p.accepted()) return p;
@@ -172,14 +172,14 @@ class RangeEkf : public detail::PlanarCvBelief {
   explicit RangeEkf(const Settings& s) : PlanarCvBelief(s), gate_(make_gate<Gate>(s)) {}
   RangeEkf(const Settings& s, Gate gate) : PlanarCvBelief(s), gate_(gate) {}
 
-  Status update(const io::UwbRange& r) {
+  Status update(const messages::UwbRange& r) {
     if (!started_) return Status::invalid(Problem::time_not_set);
     if (const Problem p = range_problem(r, settings_); p != Problem::none) return Status::invalid(p);
     const RangeAtHeight h{r.anchor_position, settings_.tag_height_m, settings_.range_sigma_m};
     return ekf::update<4>(h, belief_, Vector<1>(r.range_m), gate_);
   }
 
-  Status apply_epoch(std::span<const io::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
+  Status apply_epoch(std::span<const messages::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
     return apply_ranges_in_order(*this, epoch, attach, statuses);
   }
 
@@ -192,7 +192,7 @@ class MotionModelOnly : public detail::PlanarCvBelief {
  public:
   using PlanarCvBelief::PlanarCvBelief;
   static constexpr bool uses_ranges = false;  // the run loop never offers it a range
-  Status apply_epoch(std::span<const io::UwbRange> epoch, std::span<const bool>, std::span<Status>) {
+  Status apply_epoch(std::span<const messages::UwbRange> epoch, std::span<const bool>, std::span<Status>) {
     return predict_to(epoch.back().t);
   }
 };

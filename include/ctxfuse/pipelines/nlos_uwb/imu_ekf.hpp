@@ -18,7 +18,7 @@
 #include "ctxfuse/core/gaussian.hpp"
 #include "ctxfuse/core/status.hpp"
 #include "ctxfuse/filters/ekf.hpp"
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/models/planar.hpp"
 #include "ctxfuse/models/planar_interval.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/estimators.hpp"
@@ -51,7 +51,7 @@ class ImuRangeEkf {
   }
 
   /// One piece of the IMU stream: sample `s` in force over [t, t + span).
-  void add_imu(double t, double span, const io::ImuSample& s) {
+  void add_imu(double t, double span, const messages::ImuSample& s) {
     pieces_.add(t, span, region_imm::planar_input(s), motion_.step);
   }
 
@@ -83,13 +83,13 @@ class ImuRangeEkf {
     return s;
   }
 
-  Status update(const io::UwbRange& r) {
+  Status update(const messages::UwbRange& r) {
     if (!started_) return Status::invalid(Problem::time_not_set);
     if (const Problem p = range_problem(r, settings_); p != Problem::none) return Status::invalid(p);
     return ekf::update<L::size>(planar_range(r, settings_), belief_, Vector<1>(r.range_m), gate_);
   }
 
-  Status apply_epoch(std::span<const io::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
+  Status apply_epoch(std::span<const messages::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
     return apply_ranges_in_order(*this, epoch, attach, statuses);
   }
 

@@ -28,7 +28,7 @@
 #include "ctxfuse/core/gaussian.hpp"
 #include "ctxfuse/core/status.hpp"
 #include "ctxfuse/filters/fixed_lag.hpp"
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/models/planar.hpp"
 #include "ctxfuse/models/planar_interval.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/estimators.hpp"
@@ -86,7 +86,7 @@ struct ImuFusionSettings {
 };
 
 /// The range model of `r` on the planar IMU state (tag height and ranging sigma from settings).
-inline models::PlanarRange planar_range(const io::UwbRange& r, const Settings& s) {
+inline models::PlanarRange planar_range(const messages::UwbRange& r, const Settings& s) {
   models::PlanarRange h;
   h.anchor = r.anchor_position;
   h.tag_height = s.tag_height_m;
@@ -193,7 +193,7 @@ class ImuRangeSmoother {
   Eigen::Vector2d output_position() const { return L::get<"p">(lagged().x); }
 
   /// One piece of the IMU stream: sample `s` in force over [t, t + span).
-  void add_imu(double t, double span, const io::ImuSample& s) {
+  void add_imu(double t, double span, const messages::ImuSample& s) {
     pieces_.add(t, span, region_imm::planar_input(s), smoother_.motion().step);
   }
 
@@ -214,7 +214,7 @@ class ImuRangeSmoother {
   /// The smoother adds states only with an epoch: here only the clock is checked.
   Status predict_to(double t) const { return clock_check(started_, time(), t); }
 
-  Status apply_epoch(std::span<const io::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
+  Status apply_epoch(std::span<const messages::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
     if (auto done = smoother_epoch_check(started_, fresh_, time(), kSlots, epoch, statuses)) return *done;
     const double t = epoch.back().t, dt = t - time();
     typename Motion::Input u;
@@ -223,7 +223,7 @@ class ImuRangeSmoother {
     SquareMatrix<L::size> F;
     const Vector<L::size> x = smoother_.motion().predict(smoother_.newest(), u, dt, &F);
     const SquareMatrix<L::size> P = F * smoother_.newest_covariance() * F.transpose() + smoother_.motion().noise(smoother_.newest(), u, dt);
-    auto range = [&](const io::UwbRange& r) { return planar_range(r, settings_); };
+    auto range = [&](const messages::UwbRange& r) { return planar_range(r, settings_); };
     const Status s = gated_smoother_step(smoother_, settings_, gate_.threshold(1), range, u, x, P, epoch, attach, statuses);
     if (s.accepted()) pieces_.drop_before(t);
     return s;

@@ -32,7 +32,7 @@
 #include <vector>
 
 #include "ctxfuse/filters/multilateration.hpp"
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/classifier.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/settings.hpp"
 
@@ -119,19 +119,19 @@ inline void difference_autocorrelation(const std::map<int, std::map<long, double
 }
 
 /// The static start's 3-D fit of each anchor's median range (fills facts' tag_height_*).
-inline void fit_tag_height(const std::map<int, std::vector<const io::UwbRange*>>& by_anchor, double t0, double t1,
+inline void fit_tag_height(const std::map<int, std::vector<const messages::UwbRange*>>& by_anchor, double t0, double t1,
                            RecordingFacts& f) {
   if (!(t1 - t0 >= 1.0)) {
     f.tag_height_note = "static start under 1 s: no height fit";
     return;
   }
-  std::vector<io::UwbRange> medians;
+  std::vector<messages::UwbRange> medians;
   for (const auto& [id, list] : by_anchor) {
     std::vector<double> r;
     for (const auto* x : list)
       if (x->t < t1) r.push_back(x->range_m);
     if (r.empty()) continue;
-    io::UwbRange m = *list.front();
+    messages::UwbRange m = *list.front();
     m.range_m = median(std::move(r));
     medians.push_back(m);
   }
@@ -151,7 +151,7 @@ inline void fit_tag_height(const std::map<int, std::vector<const io::UwbRange*>>
 }  // namespace detail
 
 /// The recording's facts from its time-ordered ranges (see the header comment).
-inline RecordingFacts describe_recording(std::span<const io::UwbRange> ranges) {
+inline RecordingFacts describe_recording(std::span<const messages::UwbRange> ranges) {
   RecordingFacts f;
   if (ranges.empty()) {
     f.averaging_note = "no ranges: raw assumed";
@@ -159,7 +159,7 @@ inline RecordingFacts describe_recording(std::span<const io::UwbRange> ranges) {
   }
   f.t_begin = ranges.front().t;
   f.t_end = ranges.back().t;
-  std::map<int, std::vector<const io::UwbRange*>> by_anchor;
+  std::map<int, std::vector<const messages::UwbRange*>> by_anchor;
   for (const auto& r : ranges) by_anchor[r.anchor_id].push_back(&r);
   std::vector<double> periods;
   for (const auto& [id, list] : by_anchor) {

@@ -29,7 +29,7 @@
 
 #include "ctxfuse/core/status.hpp"
 #include "ctxfuse/filters/multilateration.hpp"
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/io/replay.hpp"
 #include "ctxfuse/policies/health.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/classifier.hpp"
@@ -49,7 +49,7 @@ struct Estimate {
 
 /// Everything the run said about one range (the identification metrics score these).
 struct RangeRecord {
-  io::UwbRange range;
+  messages::UwbRange range;
   SvmInput input;
   RangeVerdict verdict;
   bool attached = false;
@@ -75,7 +75,7 @@ inline filters::MultilaterationOptions snapshot_options(const Settings& s) {
 /// centroid and from rings of 8 points at 3, 10, 30 and 60 m around it (the site's scale);
 /// not ok when no run gives an accepted fix. `max_rms_m` is the residual test (3 sigma for a
 /// start; infinite for the LS baseline, which keeps every solution).
-inline filters::Multilateration best_snapshot_fix(std::span<const io::UwbRange> epoch, const Settings& s, double max_rms_m) {
+inline filters::Multilateration best_snapshot_fix(std::span<const messages::UwbRange> epoch, const Settings& s, double max_rms_m) {
   filters::MultilaterationOptions o = snapshot_options(s);
   o.max_rms_m = max_rms_m;
   filters::Multilateration best = filters::multilaterate(epoch, o);
@@ -100,21 +100,21 @@ class EpochAssembler {
  public:
   EpochAssembler(double window_s, Process& process) : window_(window_s), process_(process) {}
 
-  void on(const io::UwbRange& r) {
+  void on(const messages::UwbRange& r) {
     bool repeat = false;
     for (int i = 0; i < n_; ++i) repeat = repeat || epoch_[static_cast<std::size_t>(i)].anchor_id == r.anchor_id;
     if (n_ > 0 && (repeat || n_ == kMaxEpochRanges || r.t - epoch_[0].t > window_)) flush();
     epoch_[static_cast<std::size_t>(n_++)] = r;
   }
   void flush() {
-    if (n_ > 0) process_(std::span<const io::UwbRange>(epoch_.data(), static_cast<std::size_t>(n_)));
+    if (n_ > 0) process_(std::span<const messages::UwbRange>(epoch_.data(), static_cast<std::size_t>(n_)));
     n_ = 0;
   }
 
  private:
   double window_;
   Process& process_;
-  std::array<io::UwbRange, kMaxEpochRanges> epoch_{};
+  std::array<messages::UwbRange, kMaxEpochRanges> epoch_{};
   int n_ = 0;
 };
 
@@ -124,7 +124,7 @@ class EpochProcessor {
   EpochProcessor(const Settings& s, Estimator& est, const Policy& policy, NlosClassifier& classifier, Track& track)
       : settings_(s), est_(est), policy_(policy), classifier_(classifier), track_(track) {}
 
-  void operator()(std::span<const io::UwbRange> epoch) {
+  void operator()(std::span<const messages::UwbRange> epoch) {
     ++track_.epochs;
     bool started_here = false;
     if (!est_.started()) {
@@ -244,20 +244,20 @@ class EpochProcessor {
 template <class Assembler>
 struct RangeHandler {
   Assembler& assembler;
-  void propagate(const io::ImuSample&, double) {}
-  void on(const io::UwbRange& r) { assembler.on(r); }
+  void propagate(const messages::ImuSample&, double) {}
+  void on(const messages::UwbRange& r) { assembler.on(r); }
 };
 
 /// Runs `estimator` under `policy` over a time-ordered range stream.
 template <class Estimator, NlosPolicy Policy>
-Track run(std::span<const io::UwbRange> ranges, Estimator estimator, const Policy& policy, NlosClassifier classifier,
+Track run(std::span<const messages::UwbRange> ranges, Estimator estimator, const Policy& policy, NlosClassifier classifier,
           const Settings& s) {
   Track track;
   track.ranges.reserve(ranges.size());
   EpochProcessor<Estimator, Policy> process(s, estimator, policy, classifier, track);
   EpochAssembler<EpochProcessor<Estimator, Policy>> epochs(s.epoch_window_s, process);
   RangeHandler<decltype(epochs)> handler{epochs};
-  io::replay(handler, std::span<const io::ImuSample>(), ranges);
+  io::replay(handler, std::span<const messages::ImuSample>(), ranges);
   epochs.flush();
   return track;
 }
@@ -269,18 +269,18 @@ struct ImuRangeHandler {
   Assembler& assembler;
   Estimator& estimator;
   double now = std::numeric_limits<double>::quiet_NaN();
-  void on(const io::ImuSample& u) { now = u.t; }  // replay: after the propagation to its stamp
-  void propagate(const io::ImuSample& u, double dt) {
+  void on(const messages::ImuSample& u) { now = u.t; }  // replay: after the propagation to its stamp
+  void propagate(const messages::ImuSample& u, double dt) {
     estimator.add_imu(now, dt, u);
     now += dt;
   }
-  void on(const io::UwbRange& r) { assembler.on(r); }
+  void on(const messages::UwbRange& r) { assembler.on(r); }
 };
 
 /// Runs an estimator that takes an IMU stream (add_imu) over the IMU and range streams.
 template <class Estimator, NlosPolicy Policy>
-  requires requires(Estimator& e, const io::ImuSample& u) { e.add_imu(0.0, 0.0, u); }
-Track run(std::span<const io::ImuSample> imu, std::span<const io::UwbRange> ranges, Estimator estimator, const Policy& policy,
+  requires requires(Estimator& e, const messages::ImuSample& u) { e.add_imu(0.0, 0.0, u); }
+Track run(std::span<const messages::ImuSample> imu, std::span<const messages::UwbRange> ranges, Estimator estimator, const Policy& policy,
           NlosClassifier classifier, const Settings& s) {
   Track track;
   track.ranges.reserve(ranges.size());
@@ -296,11 +296,11 @@ Track run(std::span<const io::ImuSample> imu, std::span<const io::UwbRange> rang
 /// anchors' centroid without a residual test (every solution kept; degenerate geometry or no
 /// convergence gives no estimate). The multi-start's smallest residual is no better here: an
 /// NLOS or gross range often fits the mirror image best (8.9 m on LOS case 1 against 0.87 m).
-inline Track least_squares_track(std::span<const io::UwbRange> ranges, const Settings& s) {
+inline Track least_squares_track(std::span<const messages::UwbRange> ranges, const Settings& s) {
   Track track;
   filters::MultilaterationOptions o = snapshot_options(s);
   o.max_rms_m = std::numeric_limits<double>::infinity();
-  auto process = [&](std::span<const io::UwbRange> epoch) {
+  auto process = [&](std::span<const messages::UwbRange> epoch) {
     ++track.epochs;
     const auto fix = filters::multilaterate(epoch, o);
     if (!fix.ok()) return;
@@ -309,7 +309,7 @@ inline Track least_squares_track(std::span<const io::UwbRange> ranges, const Set
   };
   EpochAssembler<decltype(process)> epochs(s.epoch_window_s, process);
   RangeHandler<decltype(epochs)> handler{epochs};
-  io::replay(handler, std::span<const io::ImuSample>(), ranges);
+  io::replay(handler, std::span<const messages::ImuSample>(), ranges);
   epochs.flush();
   return track;
 }

@@ -30,7 +30,7 @@ namespace ctxfuse::pipelines::nlos_uwb {
 /// The EKF's checks and NIS test of one range (model h) against a predicted state (x, P):
 /// what the smoothers apply before a range enters the window.
 template <class Model, int N>
-Status gate_range(const Settings& s, double threshold, const Model& h, const io::UwbRange& r, const Vector<N>& x,
+Status gate_range(const Settings& s, double threshold, const Model& h, const messages::UwbRange& r, const Vector<N>& x,
                   const SquareMatrix<N>& P) {
   if (const Problem p = range_problem(r, s); p != Problem::none) return Status::invalid(p);
   Matrix<1, N> H;
@@ -50,7 +50,7 @@ Status gate_range(const Settings& s, double threshold, const Model& h, const io:
 /// time (a simulator, or a system stamping the epoch once) is the epoch the start's fix was
 /// computed from: its ranges are in the prior, and it is accepted without a step.
 inline std::optional<Status> smoother_epoch_check(bool started, bool& fresh, double now, int slots,
-                                                  std::span<const io::UwbRange> epoch, std::span<Status> statuses) {
+                                                  std::span<const messages::UwbRange> epoch, std::span<Status> statuses) {
   if (!started) return Status::invalid(Problem::time_not_set);
   if (static_cast<int>(epoch.size()) > slots) return Status::invalid(Problem::measurement_count_above_capacity);
   const double dt = epoch.back().t - now;
@@ -68,7 +68,7 @@ inline std::optional<Status> smoother_epoch_check(bool started, bool& fresh, dou
 template <class S, class MakeRange>
 Status gated_smoother_step(S& smoother, const Settings& s, double gate_threshold, MakeRange&& range,
                            const typename S::Input& u, const Vector<S::dim>& x, const SquareMatrix<S::dim>& P,
-                           std::span<const io::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
+                           std::span<const messages::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
   typename S::Measurements meas;
   for (std::size_t i = 0; i < epoch.size(); ++i) {
     const auto h = range(epoch[i]);
@@ -128,13 +128,13 @@ class RangeSmoother {
   /// The smoother adds states only with an epoch: here only the clock is checked.
   Status predict_to(double t) const { return clock_check(started_, time(), t); }
 
-  Status apply_epoch(std::span<const io::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
+  Status apply_epoch(std::span<const messages::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
     if (auto done = smoother_epoch_check(started_, fresh_, time(), kSlots, epoch, statuses)) return *done;
     const double dt = epoch.back().t - time();
     SquareMatrix<4> F;
     const Vector<4> x = smoother_.motion().predict(smoother_.newest(), NoInput{}, dt, &F);
     const SquareMatrix<4> P = F * smoother_.newest_covariance() * F.transpose() + smoother_.motion().noise(x, NoInput{}, dt);
-    auto range = [&](const io::UwbRange& r) { return RangeAtHeight{r.anchor_position, settings_.tag_height_m, settings_.range_sigma_m}; };
+    auto range = [&](const messages::UwbRange& r) { return RangeAtHeight{r.anchor_position, settings_.tag_height_m, settings_.range_sigma_m}; };
     return gated_smoother_step(smoother_, settings_, gate_.threshold(1), range, NoInput{}, x, P, epoch, attach, statuses);
   }
 

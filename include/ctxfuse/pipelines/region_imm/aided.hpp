@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "ctxfuse/core/status.hpp"
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/models/held_input.hpp"
 #include "ctxfuse/pipelines/region_imm/models.hpp"
 #include "ctxfuse/pipelines/region_imm/settings.hpp"
@@ -125,7 +125,7 @@ class Aided {
 
   void start(double t0, const Gaussian<L::size>& b0) { core_.start(t0, b0); }
   /// The fix the start was aligned on (in the initial belief, not an update).
-  void start_fix(const io::GnssFix& fix) { last_fix_ = fix; }
+  void start_fix(const messages::GnssFix& fix) { last_fix_ = fix; }
 
   void predict(const models::PlanarImu& u, double dt) {
     if (integrity_.pending())
@@ -140,17 +140,17 @@ class Aided {
     if (held_input_.apply(u, step) != models::InputUse::taken) ++track_.rejected_imu;
   }
 
-  void speed(const io::SpeedSample& v) {
+  void speed(const messages::SpeedSample& v) {
     if (!core_.speed(v)) ++track_.rejected_speed;
   }
 
-  void uwb(const io::UwbRange& r) {
+  void uwb(const messages::UwbRange& r) {
     if (!core_.takes_uwb()) return;
     record_health(Source::uwb, r.t, r.anchor_id, core_.uwb(r));
     if (core_.watches_uwb()) integrity_.add(r);
   }
 
-  void gnss(const io::GnssFix& fix) {
+  void gnss(const messages::GnssFix& fix) {
     last_fix_ = fix;
     if (core_.takes_gnss()) record_health(Source::gnss, fix.t, -1, core_.gnss(fix));
   }
@@ -158,7 +158,7 @@ class Aided {
   /// End of a receiver epoch: closes the cycle, records the estimate, recovers from lock-outs,
   /// opens the next cycle.
   void epoch(double t) {
-    const io::GnssFix* fix = last_fix_ && last_fix_->t == t ? &*last_fix_ : nullptr;
+    const messages::GnssFix* fix = last_fix_ && last_fix_->t == t ? &*last_fix_ : nullptr;
     core_.close_cycle(t);
     track_.record(t, core_.position(), core_.dominant_mode());
     // A lock-out of the estimator as a whole widens every taker and restarts their counts.
@@ -213,7 +213,7 @@ class Aided {
   std::array<FilterHealth, static_cast<std::size_t>(kTakers)> health_{};
   std::optional<FilterHealth> whole_ = Core::kWhole ? std::optional<FilterHealth>(FilterHealth(s_)) : std::nullopt;
   UwbIntegrity integrity_;
-  std::optional<io::GnssFix> last_fix_;
+  std::optional<messages::GnssFix> last_fix_;
   models::HeldInput<models::PlanarImu> held_input_;
   Track track_;
 };

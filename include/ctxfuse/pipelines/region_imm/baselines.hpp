@@ -25,15 +25,15 @@ struct GnssOnly {
   double last_fix_t = -1e300;
   void start(double, const Gaussian<L::size>& b0) { last = L::get<"p">(b0.mean); }
   void predict(const models::PlanarImu&, double) {}
-  void speed(const io::SpeedSample&) {}
-  void uwb(const io::UwbRange&) {}
-  void gnss(const io::GnssFix& e) {
+  void speed(const messages::SpeedSample&) {}
+  void uwb(const messages::UwbRange&) {}
+  void gnss(const messages::GnssFix& e) {
     if (!e.position.head<2>().allFinite()) return;
     last = e.position.head<2>();
     last_fix_t = e.t;
   }
   void epoch(double t) { track.record(t, last, -1, last_fix_t == t); }
-  void start_fix(const io::GnssFix& e) { gnss(e); }
+  void start_fix(const messages::GnssFix& e) { gnss(e); }
 };
 
 /// UWB alone: the ranges in a constant-velocity EKF (no IMU), as a UWB positioning system
@@ -56,7 +56,7 @@ struct UwbOnly {
   double last_range_t = -1e9;
   Eigen::Vector2d held = Eigen::Vector2d::Zero();
   double now = 0.0;
-  std::vector<io::UwbRange> epoch_ranges{};  // the ranges of the current time stamp so far
+  std::vector<messages::UwbRange> epoch_ranges{};  // the ranges of the current time stamp so far
   void start(double t0, const Gaussian<L::size>& b0) {
     const Eigen::Vector2d p0 = L::get<"p">(b0.mean);
     Cv cv;
@@ -74,7 +74,7 @@ struct UwbOnly {
     // The constant-velocity model takes no input; dt > 0 is the replay's guarantee.
     (void)f->predict({}, dt);
   }
-  void speed(const io::SpeedSample&) {}
+  void speed(const messages::SpeedSample&) {}
   // The integrity check with the chi-square test (0.999, 2 dof) alone and one snapshot
   // enough: a snapshot tracker has no IMU to carry it through an NLOS stamp, so it follows
   // every snapshot that disagrees.
@@ -83,7 +83,7 @@ struct UwbOnly {
     const auto& b = f->belief();
     return mirror_check.check(t, snap.position, snap.cov, L::get<"p">(b.mean), L::cov<"p">(b.cov)).has_value();
   }
-  void uwb(const io::UwbRange& r) {
+  void uwb(const messages::UwbRange& r) {
     last_range_t = now;
     add_to_stamp(epoch_ranges, r);
     const auto snap = filters::multilaterate(epoch_ranges, snapshot_options(s));
@@ -107,7 +107,7 @@ struct UwbOnly {
     health.record(r.t, f->update(uwb_meas(r, s), Vector<1>(r.range_m)));
     if (health.lockout(r.t)) locked = false;
   }
-  void gnss(const io::GnssFix&) {}
+  void gnss(const messages::GnssFix&) {}
   void epoch(double t) {
     if (now - last_range_t > s.uwb_hold_after_s) locked = false;
     if (locked) held = L::get<"p">(f->belief().mean);

@@ -47,7 +47,7 @@ bool accepted(const imm::UpdateResult<R>& r) {
 // Aided counts it (Track::rejected_speed). The constraint feeds no health count: it is no
 // sensor whose lock-out a recovery could mend.
 template <class UpdateFn>
-bool apply_constraint(const Settings& s, const io::SpeedSample& v, double share, UpdateFn&& update) {
+bool apply_constraint(const Settings& s, const messages::SpeedSample& v, double share, UpdateFn&& update) {
   if (s.use_speed) return accepted(update(speed_meas(s, share), Vector<2>(v.speed_mps, 0.0)));
   if (s.use_nhc) return accepted(update(nhc_meas(s, share), Vector<1>(0.0)));
   return true;
@@ -68,7 +68,7 @@ struct SingleCore {
     f.emplace(process_model(*s, process_factor), b0, FilterOptions{}, ChiSquareGate(s->gate_probability));
   }
   Status predict(const models::PlanarImu& u, double dt) { return f->predict(u, dt); }
-  bool speed(const io::SpeedSample& v) {
+  bool speed(const messages::SpeedSample& v) {
     return detail::apply_constraint(*s, v, 1.0, [&](const auto& m, const auto& z) { return f->update(m, z); });
   }
   const Gaussian<L::size>& integrity_view() const { return f->belief(); }
@@ -80,8 +80,8 @@ struct SingleCore {
   bool takes_gnss() const { return gnss_taker; }
   bool takes_uwb() const { return uwb_taker; }
   bool watches_uwb() const { return uwb_taker; }
-  Takes<1> gnss(const io::GnssFix& e) { return {f->update(gnss_meas(e, *s, meas_factor), Vector<2>(e.position.head<2>()))}; }
-  Takes<1> uwb(const io::UwbRange& r) { return {f->update(uwb_meas(r, *s, meas_factor), Vector<1>(r.range_m))}; }
+  Takes<1> gnss(const messages::GnssFix& e) { return {f->update(gnss_meas(e, *s, meas_factor), Vector<2>(e.position.head<2>()))}; }
+  Takes<1> uwb(const messages::UwbRange& r) { return {f->update(uwb_meas(r, *s, meas_factor), Vector<1>(r.range_m))}; }
   void close_cycle(double) {}
   Eigen::Vector2d position() const { return L::get<"p">(f->belief().mean); }
   int dominant_mode() const { return -1; }
@@ -114,7 +114,7 @@ struct FederatedCore {
     f.emplace(process_model_, b0, beta, FilterOptions{}, ChiSquareGate(s->gate_probability));
   }
   Status predict(const models::PlanarImu& u, double dt) { return f->predict(u, dt); }
-  bool speed(const io::SpeedSample& v) {  // accepted by either local filter
+  bool speed(const messages::SpeedSample& v) {  // accepted by either local filter
     bool any = false;
     for (int i = 0; i < 2; ++i)
       any = detail::apply_constraint(*s, v, 1.0 / beta[static_cast<std::size_t>(i)],
@@ -131,8 +131,8 @@ struct FederatedCore {
   bool takes_gnss() const { return true; }
   bool takes_uwb() const { return true; }
   bool watches_uwb() const { return true; }
-  Takes<1> gnss(const io::GnssFix& e) { return {f->update(0, gnss_meas(e, *s), Vector<2>(e.position.head<2>()))}; }
-  Takes<1> uwb(const io::UwbRange& r) { return {f->update(1, uwb_meas(r, *s), Vector<1>(r.range_m))}; }
+  Takes<1> gnss(const messages::GnssFix& e) { return {f->update(0, gnss_meas(e, *s), Vector<2>(e.position.head<2>()))}; }
+  Takes<1> uwb(const messages::UwbRange& r) { return {f->update(1, uwb_meas(r, *s), Vector<1>(r.range_m))}; }
   // A refused fusion (the locals' information not positive definite) keeps the last global
   // estimate and the locals as they are; the next epoch fuses again.
   void close_cycle(double) {
@@ -208,7 +208,7 @@ struct ImmCore {
     open_cycle(t0);
   }
   Status predict(const models::PlanarImu& u, double dt) { return f->predict(u, dt); }
-  bool speed(const io::SpeedSample& v) {
+  bool speed(const messages::SpeedSample& v) {
     return detail::apply_constraint(*s, v, 1.0,
                                     [&](const auto& m, const auto& z) { return f->update(SpeedTag{}, m, z); });
   }
@@ -222,11 +222,11 @@ struct ImmCore {
   bool takes_gnss() const { return true; }
   bool takes_uwb() const { return true; }
   bool watches_uwb() const { return mask(false) != 0u; }
-  Takes<3> gnss(const io::GnssFix& e) {
+  Takes<3> gnss(const messages::GnssFix& e) {
     const auto m = boost::hana::make_tuple(gnss_meas(e, *s), gnss_meas(e, *s, s->iotr_noise_factor), gnss_meas(e, *s));
     return takes_of(f->update(GnssTag{}, m, Vector<2>(e.position.head<2>()), mask(true)));
   }
-  Takes<3> uwb(const io::UwbRange& r) {
+  Takes<3> uwb(const messages::UwbRange& r) {
     const auto m = boost::hana::make_tuple(uwb_meas(r, *s), uwb_meas(r, *s, s->iotr_noise_factor), uwb_meas(r, *s));
     return takes_of(f->update(UwbTag{}, m, Vector<1>(r.range_m), mask(false)));
   }

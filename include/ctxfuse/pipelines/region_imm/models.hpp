@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "ctxfuse/filters/multilateration.hpp"
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/models/planar.hpp"
 #include "ctxfuse/pipelines/region_imm/settings.hpp"
 #include "ctxfuse/policies/health.hpp"
@@ -31,7 +31,7 @@ inline models::PlanarImuModel process_model(const Settings& s, double factor) {
 
 /// The planar model's input from an IMU sample (rates, vehicle axes: yaw rate about z, specific
 /// force along x and y).
-inline models::PlanarImu planar_input(const io::ImuSample& s) {
+inline models::PlanarImu planar_input(const messages::ImuSample& s) {
   models::PlanarImu u;
   u.yaw_rate = s.gyro.z();
   u.accel = s.accel.head<2>();
@@ -39,13 +39,13 @@ inline models::PlanarImu planar_input(const io::ImuSample& s) {
 }
 
 /// R from the receiver's reported horizontal sigma, floored (receivers under-report in multipath).
-inline models::PlanarPosition gnss_meas(const io::GnssFix& e, const Settings& s, double factor = 1.0) {
+inline models::PlanarPosition gnss_meas(const messages::GnssFix& e, const Settings& s, double factor = 1.0) {
   models::PlanarPosition m;
   const double sd = std::max(e.std_horizontal(), s.gnss_sigma_floor);
   m.R = SquareMatrix<2>::Identity() * (sd * sd * factor);
   return m;
 }
-inline models::PlanarRange uwb_meas(const io::UwbRange& r, const Settings& s, double factor = 1.0) {
+inline models::PlanarRange uwb_meas(const messages::UwbRange& r, const Settings& s, double factor = 1.0) {
   models::PlanarRange m;
   m.anchor = r.anchor_position;
   m.tag_height = s.uwb_tag_height;
@@ -87,7 +87,7 @@ struct FilterHealth {
   /// garage, NLOS ranges whose bias grew smoothly with the distance from the door passed the
   /// gates as motion and left a velocity error; a fixed 2 m widening then took 20 s of
   /// repeated lock-outs to reach fixes 20-40 m away (scenario "paper", seed 1).
-  double reach(const io::GnssFix* fix, const Eigen::Vector2d& p) const {
+  double reach(const messages::GnssFix* fix, const Eigen::Vector2d& p) const {
     return gnss_locked_out && fix ? (Eigen::Vector2d(fix->position.head<2>()) - p).norm() : 0.0;
   }
 };
@@ -105,7 +105,7 @@ inline filters::MultilaterationOptions snapshot_options(const Settings& s) {
 }
 
 /// Adds `r` to the ranges of one time stamp, starting a new stamp when `r` has another time.
-inline void add_to_stamp(std::vector<io::UwbRange>& stamp, const io::UwbRange& r) {
+inline void add_to_stamp(std::vector<messages::UwbRange>& stamp, const messages::UwbRange& r) {
   if (!stamp.empty() && std::abs(stamp.front().t - r.t) > 1e-9) stamp.clear();
   stamp.push_back(r);
 }
@@ -117,10 +117,10 @@ struct UwbIntegrity {
   using Fault = policies::SnapshotIntegrity<2>::Fault;
   const Settings& s;
   policies::SnapshotIntegrity<2> monitor{s.integrity};
-  std::vector<io::UwbRange> ranges{};  // of one time stamp, one per anchor
+  std::vector<messages::UwbRange> ranges{};  // of one time stamp, one per anchor
   int faults = 0;
   bool pending() const { return !ranges.empty(); }
-  void add(const io::UwbRange& r) {
+  void add(const messages::UwbRange& r) {
     if (s.uwb_integrity) add_to_stamp(ranges, r);
   }
   /// The fault, if the stamp gathered so far completes a run of disagreements with `b`.

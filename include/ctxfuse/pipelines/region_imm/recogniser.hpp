@@ -1,6 +1,6 @@
 // Region recognition of the region paper (paper A): per-epoch GNSS features (number of
 // tracked satellites, mean C/N0) -> PSO-SVM + HMM + joint vote -> recognised region per epoch.
-// Features come from the receiver's epochs (io::SatEpoch) only; the labels that train and
+// Features come from the receiver's epochs (messages::SatEpoch) only; the labels that train and
 // validate the classifiers are the caller's (from a labelled log's truth: eval/truth.hpp).
 //
 // recognise() runs the SVM per epoch and the HMM's Viterbi path over the whole log (what the
@@ -21,7 +21,7 @@
 #include "ctxfuse/classify/joint.hpp"
 #include "ctxfuse/classify/svm.hpp"
 #include "ctxfuse/classify/svm_train.hpp"
-#include "ctxfuse/io/messages.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/pipelines/region_imm/settings.hpp"
 
 namespace ctxfuse::pipelines::region_imm {
@@ -42,7 +42,7 @@ struct LabelledFeatures {
 
 /// (number of tracked satellites, their mean C/N0) per epoch; an epoch without satellites has
 /// mean C/N0 0 (what a receiver that tracks nothing reports as its average).
-inline FeatureSeries gnss_features(std::span<const io::SatEpoch> epochs) {
+inline FeatureSeries gnss_features(std::span<const messages::SatEpoch> epochs) {
   FeatureSeries f;
   f.t.reserve(epochs.size());
   f.x.reserve(epochs.size());

@@ -1,11 +1,11 @@
 // Runs one estimator of the region pipeline over a recorded or simulated log
-// (io::SensorLog): the time-ordered replay (io/replay.hpp) drives the estimator, which starts
+// (messages::SensorLog): the time-ordered replay (io/replay.hpp) drives the estimator, which starts
 // from the log's own fixes (alignment.hpp) and records its estimate at every receiver epoch.
 // Truth never enters: scoring is eval/'s (eval/region_errors.hpp).
 //
 // Streams and their order at one time stamp: the IMU propagates to each measurement's time;
 // then speed samples (the vehicle constraint), UWB ranges, the GNSS fix, and last the
-// receiver's epoch (io::SatEpoch), which ends an IMM cycle.
+// receiver's epoch (messages::SatEpoch), which ends an IMM cycle.
 #pragma once
 
 #include <optional>
@@ -45,7 +45,7 @@ struct Runner {
   const std::optional<KnownMotion>& known;
   models::DynamicAligner gnss_aligner{alignment_options(s)};
   models::DynamicAligner uwb_aligner{alignment_options(s)};
-  std::vector<io::UwbRange> stamp{};  // before the start: the ranges of the latest stamp
+  std::vector<messages::UwbRange> stamp{};  // before the start: the ranges of the latest stamp
   bool started = false;
   std::optional<Alignment> alignment{};
 
@@ -68,14 +68,14 @@ struct Runner {
     if (const auto a = uwb_aligner.add(t, snap.position, snap.cov)) begin(*a);
   }
 
-  void propagate(const io::ImuSample& u, double dt) {
+  void propagate(const messages::ImuSample& u, double dt) {
     if (!started && !stamp.empty()) flush_stamp();
     if (started) est.predict(planar_input(u), dt);
   }
-  void on(const io::SpeedSample& v) {
+  void on(const messages::SpeedSample& v) {
     if (started) est.speed(v);
   }
-  void on(const io::UwbRange& r) {
+  void on(const messages::UwbRange& r) {
     if (started) {
       est.uwb(r);
       return;
@@ -87,7 +87,7 @@ struct Runner {
     else
       add_to_stamp(stamp, r);
   }
-  void on(const io::GnssFix& fix) {
+  void on(const messages::GnssFix& fix) {
     if (started) {
       est.gnss(fix);
       return;
@@ -103,20 +103,20 @@ struct Runner {
       if constexpr (requires { est.start_fix(fix); }) est.start_fix(fix);
     }
   }
-  void on(const io::SatEpoch& e) {
+  void on(const messages::SatEpoch& e) {
     if (started) est.epoch(e.t);
   }
 };
 
 template <class Est>
-RunResult replay_log(const io::SensorLog& log, Est& est, const Settings& s, const RunOptions& o) {
+RunResult replay_log(const messages::SensorLog& log, Est& est, const Settings& s, const RunOptions& o) {
   if (log.imu.empty()) throw std::invalid_argument("region_imm: the log has no IMU samples");
   if (log.sat_epochs.empty()) throw std::invalid_argument("region_imm: the log has no receiver epochs");
   Runner<Est> runner{est, s, o.known_motion};
   RunResult out;
-  out.replay = io::replay(runner, std::span<const io::ImuSample>(log.imu), std::span<const io::SpeedSample>(log.speed),
-                          std::span<const io::UwbRange>(log.uwb), std::span<const io::GnssFix>(log.gnss),
-                          std::span<const io::SatEpoch>(log.sat_epochs));
+  out.replay = io::replay(runner, std::span<const messages::ImuSample>(log.imu), std::span<const messages::SpeedSample>(log.speed),
+                          std::span<const messages::UwbRange>(log.uwb), std::span<const messages::GnssFix>(log.gnss),
+                          std::span<const messages::SatEpoch>(log.sat_epochs));
   if (!runner.started)
     throw std::invalid_argument("region_imm: the log never gave two fixes far enough apart to start from");
   out.alignment = runner.alignment;
@@ -151,7 +151,7 @@ namespace detail {
 /// instance (instances/region_imm.hpp declares it extern): every estimator below is instantiated
 /// here, the cost of a source that calls run().
 template <class = void>
-RunResult run_any(const io::SensorLog& log, Estimator e, const Settings& s, const RunOptions& o,
+RunResult run_any(const messages::SensorLog& log, Estimator e, const Settings& s, const RunOptions& o,
                   UpdateObserver observer) {
   auto aided = [&](auto core) {
     Aided<decltype(core)> est(std::move(core), s, observer);
@@ -199,7 +199,7 @@ RunResult run_any(const io::SensorLog& log, Estimator e, const Settings& s, cons
 /// UpdateEvent&) sees every GNSS and UWB update of the IMU-driven estimators (aided.hpp).
 /// Throws std::invalid_argument when the log cannot drive the pipeline (no IMU, no epochs,
 /// never aligned) or a region IMM lacks its regions.
-inline RunResult run(const io::SensorLog& log, Estimator e, const Settings& s, const RunOptions& o = {},
+inline RunResult run(const messages::SensorLog& log, Estimator e, const Settings& s, const RunOptions& o = {},
                      UpdateObserver observer = {}) {
   return detail::run_any(log, e, s, o, observer);
 }

@@ -2,14 +2,14 @@
 // truth.csv; columns in docs/formats.md): the writer, and the readers on io/text.hpp.
 //
 //   write_drive_logs(drive, dir)   the seven files of a simulated drive
-//   read_sim_logs(dir)             what a pipeline runs on (io::SensorLog, no truth) and, apart,
-//                                  the truth and labels scoring reads (eval::TruthLog)
-//   sim::read_drive_logs(dir)      the files row by row as the simulator's structs, truth
-//                                  fields and all (the API of the former sim/log_io.hpp)
+//   read_sim_logs(dir)             what a pipeline runs on (messages::SensorLog, no truth) and, apart,
+//                                  the truth and labels scoring reads (sim::TruthLog)
+//   csv::read_drive_logs(dir)      the files row by row as the simulator's records, truth
+//                                  fields and all (sim/records.hpp)
 //
 // Every double is written in its shortest round-trip form (std::to_chars, independent of any
 // locale), so a drive written and read back is bit for bit the drive: read_sim_logs gives
-// exactly sim::sensor_log(drive). The readers reject, as io::ParseError naming file:line:column
+// exactly sensor_log(drive). The readers reject, as io::ParseError naming file:line:column
 // and the column's name: a wrong header, a wrong number of fields, text that is not a number,
 // non-finite values and magnitudes above 1e12, labels out of range, values outside their
 // physical range, time going backwards, and sats.csv rows that do not match gnss.csv's epochs.
@@ -31,10 +31,10 @@
 #include <utility>
 #include <vector>
 
-#include "ctxfuse/eval/truth.hpp"
-#include "ctxfuse/io/messages.hpp"
 #include "ctxfuse/io/text.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/sim/drive.hpp"
+#include "ctxfuse/sim/records.hpp"
 #include "ctxfuse/sim/streams.hpp"
 
 namespace ctxfuse::sim {
@@ -51,17 +51,13 @@ struct DriveLog {
   std::vector<MagSample> mag;
 };
 
-}  // namespace ctxfuse::sim
-
-namespace ctxfuse::io {
-
 /// A simulated drive's logs read back: the sensor streams, and the truth and labels apart.
 struct SimLogs {
-  SensorLog sensors;
-  eval::TruthLog truth;  // truth.csv, the `los` of sats.csv, the `nlos` of uwb.csv; no fix labels
+  messages::SensorLog sensors;
+  TruthLog truth;  // truth.csv, the `los` of sats.csv, the `nlos` of uwb.csv; no fix labels
 };
 
-namespace sim_csv {
+namespace csv {
 
 inline constexpr const char* kImuHeader = "t,gyro_x,gyro_y,gyro_z,accel_x,accel_y,accel_z";
 inline constexpr const char* kGnssHeader = "t,fix,east,north,up,std_h,std_v,num_sats,pdop,hdop,mean_cn0";
@@ -103,21 +99,21 @@ class Writer {
 };
 
 /// The rows of one log file after its header, split by io/text.hpp; every accessor throws
-/// ParseError naming file:line:column and the column.
+/// io::ParseError naming file:line:column and the column.
 class Rows {
  public:
   Rows(const std::filesystem::path& path, std::string_view header)
-      : file_(path), header_(split_fields(header, Separator::comma)), fields_(file_.name(), &header_) {
+      : file_(path), header_(io::split_fields(header, io::Separator::comma)), fields_(file_.name(), &header_) {
     std::string_view line;
-    if (!file_.next(line)) throw ParseError(file_.name(), 1, 0, "", cat("empty file: expected the header ", quote(header)));
-    if (line != header) file_.fail(cat("header is ", quote(line), ", expected ", quote(header)));
+    if (!file_.next(line)) throw io::ParseError(file_.name(), 1, 0, "", io::cat("empty file: expected the header ", io::quote(header)));
+    if (line != header) file_.fail(io::cat("header is ", io::quote(line), ", expected ", io::quote(header)));
   }
 
   /// Advances to the next non-blank row; false at the end of the file. The writer ends every
   /// row with a newline, so a last row without one was cut short (a number cut short still
   /// parses): it is not read.
   bool next() {
-    if (!next_fields(file_, fields_, Separator::comma)) return false;
+    if (!io::next_fields(file_, fields_, io::Separator::comma)) return false;
     if (!file_.ended_by_newline()) return false;
     fields_.expect_count(header_.size());
     return true;
@@ -134,7 +130,7 @@ class Rows {
   template <class Ok>
   double num_if(std::size_t i, Ok ok, std::string_view rule) const {
     const double v = num(i);
-    if (!ok(v)) fail(i, cat(rule, " (is ", v, ")"));
+    if (!ok(v)) fail(i, io::cat(rule, " (is ", v, ")"));
     return v;
   }
 
@@ -143,7 +139,7 @@ class Rows {
   double time(bool rows_share_epochs) {
     const double t = num(0);
     if (have_time_ && (rows_share_epochs ? t < last_t_ : t <= last_t_))
-      fail(0, cat("time ", t, " is not after the previous row's ", last_t_,
+      fail(0, io::cat("time ", t, " is not after the previous row's ", last_t_,
                   rows_share_epochs ? " (out of order)" : " (times must increase)"));
     last_t_ = t;
     have_time_ = true;
@@ -153,10 +149,10 @@ class Rows {
   [[noreturn]] void fail(std::size_t i, std::string reason) const { fields_.fail(i, std::move(reason)); }
 
  private:
-  static constexpr RealRules kRules{false, 1e12};  // a 1e300 in a drive log is corruption
-  TextFile file_;
-  Header header_;
-  Fields fields_;
+  static constexpr io::RealRules kRules{false, 1e12};  // a 1e300 in a drive log is corruption
+  io::TextFile file_;
+  io::Header header_;
+  io::Fields fields_;
   double last_t_ = 0.0;
   bool have_time_ = false;
 };
@@ -183,52 +179,52 @@ inline const std::vector<std::string>& log_file_names() {
 }
 
 /// Writes one log file by name from the drive (used by write_drive_logs and the tests).
-inline void write_log(std::ostream& os, const sim::Drive& d, std::string_view name) {
+inline void write_log(std::ostream& os, const Drive& d, std::string_view name) {
   using W = detail::Writer;
   if (name == "imu.csv") {
-    write_rows(os, kImuHeader, d.imu, [](W& w, const sim::ImuSample& s) { w.num(s.t).vec(s.gyro).vec(s.accel); });
+    write_rows(os, kImuHeader, d.imu, [](W& w, const ImuSample& s) { w.num(s.t).vec(s.gyro).vec(s.accel); });
   } else if (name == "gnss.csv") {
-    write_rows(os, kGnssHeader, d.gnss, [](W& w, const sim::GnssEpoch& e) {
+    write_rows(os, kGnssHeader, d.gnss, [](W& w, const GnssEpoch& e) {
       w.num(e.t).integer(e.has_fix ? 1 : 0).vec(e.position).num(e.std_horizontal_m).num(e.std_vertical_m);
       w.integer(e.num_sats).num(e.pdop).num(e.hdop).num(e.mean_cn0_dbhz);
     });
   } else if (name == "sats.csv") {
-    write_rows(os, kSatsHeader, d.sats, [](W& w, const sim::SatObservation& s) {
+    write_rows(os, kSatsHeader, d.sats, [](W& w, const SatObservation& s) {
       w.num(s.t).integer(s.sat_id).num(s.elevation_deg).num(s.azimuth_deg).num(s.cn0_dbhz).integer(s.line_of_sight ? 1 : 0);
     });
   } else if (name == "uwb.csv") {
-    write_rows(os, kUwbHeader, d.uwb, [](W& w, const sim::UwbRange& r) {
+    write_rows(os, kUwbHeader, d.uwb, [](W& w, const UwbRange& r) {
       w.num(r.t).integer(r.anchor_id).vec(r.anchor_position).num(r.range_m).num(r.rssi_dbm).num(r.rssi_first_path_dbm);
       w.integer(r.nlos ? 1 : 0);
     });
   } else if (name == "speed.csv") {
-    write_rows(os, kSpeedHeader, d.speed, [](W& w, const sim::SpeedSample& s) { w.num(s.t).num(s.speed_mps); });
+    write_rows(os, kSpeedHeader, d.speed, [](W& w, const SpeedSample& s) { w.num(s.t).num(s.speed_mps); });
   } else if (name == "mag.csv") {
-    write_rows(os, kMagHeader, d.mag, [](W& w, const sim::MagSample& s) { w.num(s.t).vec(s.field_ut); });
+    write_rows(os, kMagHeader, d.mag, [](W& w, const MagSample& s) { w.num(s.t).vec(s.field_ut); });
   } else if (name == "truth.csv") {
-    write_rows(os, kTruthHeader, d.truth, [](W& w, const sim::TruthSample& s) {
+    write_rows(os, kTruthHeader, d.truth, [](W& w, const TruthSample& s) {
       w.num(s.t).vec(s.position).vec(s.velocity).num(s.roll).num(s.pitch).num(s.yaw).vec(s.angular_rate).vec(s.specific_force);
       w.num(s.speed).integer(static_cast<int>(s.region)).integer(static_cast<int>(s.scene)).integer(s.is_static ? 1 : 0);
     });
   } else {
-    throw std::invalid_argument(cat("sim logs: unknown log file ", quote(name)));
+    throw std::invalid_argument(io::cat("sim logs: unknown log file ", io::quote(name)));
   }
 }
 
 // ---- readers, one per file ----
 
-inline std::vector<sim::ImuSample> read_imu(const std::filesystem::path& path) {
+inline std::vector<ImuSample> read_imu(const std::filesystem::path& path) {
   detail::Rows r(path, kImuHeader);
-  std::vector<sim::ImuSample> out;
+  std::vector<ImuSample> out;
   while (r.next()) out.push_back({r.time(false), r.vec(1), r.vec(4)});
   return out;
 }
 
-inline std::vector<sim::GnssEpoch> read_gnss(const std::filesystem::path& path) {
+inline std::vector<GnssEpoch> read_gnss(const std::filesystem::path& path) {
   detail::Rows r(path, kGnssHeader);
-  std::vector<sim::GnssEpoch> out;
+  std::vector<GnssEpoch> out;
   while (r.next()) {
-    sim::GnssEpoch e;
+    GnssEpoch e;
     e.t = r.time(false);
     e.has_fix = r.flag(1);
     e.position = r.vec(2);
@@ -246,11 +242,11 @@ inline std::vector<sim::GnssEpoch> read_gnss(const std::filesystem::path& path) 
   return out;
 }
 
-inline std::vector<sim::SatObservation> read_sats(const std::filesystem::path& path) {
+inline std::vector<SatObservation> read_sats(const std::filesystem::path& path) {
   detail::Rows r(path, kSatsHeader);
-  std::vector<sim::SatObservation> out;
+  std::vector<SatObservation> out;
   while (r.next()) {
-    sim::SatObservation s;
+    SatObservation s;
     s.t = r.time(true);
     s.sat_id = r.integer<int>(1, 1, 999);
     s.elevation_deg = r.num_if(2, [](double v) { return v >= -90.0 && v <= 90.0; }, "elevation must be within [-90, 90] deg");
@@ -262,11 +258,11 @@ inline std::vector<sim::SatObservation> read_sats(const std::filesystem::path& p
   return out;
 }
 
-inline std::vector<sim::UwbRange> read_uwb(const std::filesystem::path& path) {
+inline std::vector<UwbRange> read_uwb(const std::filesystem::path& path) {
   detail::Rows r(path, kUwbHeader);
-  std::vector<sim::UwbRange> out;
+  std::vector<UwbRange> out;
   while (r.next()) {
-    sim::UwbRange u;
+    UwbRange u;
     u.t = r.time(true);
     u.anchor_id = r.integer<int>(1, 0, 1'000'000);
     u.anchor_position = r.vec(2);
@@ -279,9 +275,9 @@ inline std::vector<sim::UwbRange> read_uwb(const std::filesystem::path& path) {
   return out;
 }
 
-inline std::vector<sim::SpeedSample> read_speed(const std::filesystem::path& path) {
+inline std::vector<SpeedSample> read_speed(const std::filesystem::path& path) {
   detail::Rows r(path, kSpeedHeader);
-  std::vector<sim::SpeedSample> out;
+  std::vector<SpeedSample> out;
   while (r.next()) {
     const double t = r.time(false);
     out.push_back({t, r.num_if(1, [](double v) { return v >= -100.0 && v <= 100.0; }, "speed must be within [-100, 100] m/s")});
@@ -289,11 +285,11 @@ inline std::vector<sim::SpeedSample> read_speed(const std::filesystem::path& pat
   return out;
 }
 
-inline std::vector<sim::MagSample> read_mag(const std::filesystem::path& path) {
+inline std::vector<MagSample> read_mag(const std::filesystem::path& path) {
   detail::Rows r(path, kMagHeader);
-  std::vector<sim::MagSample> out;
+  std::vector<MagSample> out;
   while (r.next()) {
-    sim::MagSample m;
+    MagSample m;
     m.t = r.time(false);
     m.field_ut = r.vec(1);
     if (m.field_ut.norm() > 1e4) r.fail(1, "field magnitude above 10000 uT");
@@ -302,11 +298,11 @@ inline std::vector<sim::MagSample> read_mag(const std::filesystem::path& path) {
   return out;
 }
 
-inline std::vector<sim::TruthSample> read_truth(const std::filesystem::path& path) {
+inline std::vector<TruthSample> read_truth(const std::filesystem::path& path) {
   detail::Rows r(path, kTruthHeader);
-  std::vector<sim::TruthSample> out;
+  std::vector<TruthSample> out;
   while (r.next()) {
-    sim::TruthSample s;
+    TruthSample s;
     s.t = r.time(false);
     s.position = r.vec(1);
     s.velocity = r.vec(4);
@@ -316,8 +312,8 @@ inline std::vector<sim::TruthSample> read_truth(const std::filesystem::path& pat
     s.angular_rate = r.vec(10);
     s.specific_force = r.vec(13);
     s.speed = r.num(16);
-    s.region = static_cast<sim::Region>(r.integer<int>(17, 0, 2));
-    s.scene = static_cast<sim::Scene>(r.integer<int>(18, 0, 2));
+    s.region = static_cast<Region>(r.integer<int>(17, 0, 2));
+    s.scene = static_cast<Scene>(r.integer<int>(18, 0, 2));
     s.is_static = r.flag(19);
     out.push_back(s);
   }
@@ -325,9 +321,9 @@ inline std::vector<sim::TruthSample> read_truth(const std::filesystem::path& pat
 }
 
 /// Reads the seven files from dir and links every GNSS epoch to its satellites (the rows of
-/// sats.csv with the epoch's time, as many as its num_sats). Throws ParseError.
-inline sim::DriveLog read_drive_logs(const std::filesystem::path& dir) {
-  sim::DriveLog log;
+/// sats.csv with the epoch's time, as many as its num_sats). Throws io::ParseError.
+inline DriveLog read_drive_logs(const std::filesystem::path& dir) {
+  DriveLog log;
   log.imu = read_imu(dir / "imu.csv");
   log.gnss = read_gnss(dir / "gnss.csv");
   log.sats = read_sats(dir / "sats.csv");
@@ -343,37 +339,37 @@ inline sim::DriveLog read_drive_logs(const std::filesystem::path& dir) {
     int n = 0;
     for (; k < log.sats.size() && log.sats[k].t == e.t; ++k) ++n;
     if (n != e.num_sats)
-      throw ParseError(sats_file, e.first_sat + 2, 1, "t",
-                       cat("gnss.csv lists ", e.num_sats, " satellites at t=", e.t, " but sats.csv has ", n));
+      throw io::ParseError(sats_file, e.first_sat + 2, 1, "t",
+                       io::cat("gnss.csv lists ", e.num_sats, " satellites at t=", e.t, " but sats.csv has ", n));
   }
   if (k != log.sats.size())
-    throw ParseError(sats_file, k + 2, 1, "t", cat("time ", log.sats[k].t, " is not an epoch of gnss.csv"));
+    throw io::ParseError(sats_file, k + 2, 1, "t", io::cat("time ", log.sats[k].t, " is not an epoch of gnss.csv"));
   return log;
 }
 
-}  // namespace sim_csv
+}  // namespace csv
 
 /// Writes all seven files into dir (created if needed). Throws std::runtime_error naming
 /// the file that could not be written.
-inline void write_drive_logs(const sim::Drive& d, const std::filesystem::path& dir) {
+inline void write_drive_logs(const Drive& d, const std::filesystem::path& dir) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
-  if (ec) throw std::runtime_error(cat(dir.string(), ": cannot create directory: ", ec.message()));
-  for (const auto& name : sim_csv::log_file_names()) {
+  if (ec) throw std::runtime_error(io::cat(dir.string(), ": cannot create directory: ", ec.message()));
+  for (const auto& name : csv::log_file_names()) {
     const auto path = dir / name;
     std::ofstream os(path, std::ios::binary);
-    if (!os) throw std::runtime_error(cat(path.string(), ": cannot open for writing"));
-    sim_csv::write_log(os, d, name);
+    if (!os) throw std::runtime_error(io::cat(path.string(), ": cannot open for writing"));
+    csv::write_log(os, d, name);
     os.flush();
-    if (!os) throw std::runtime_error(cat(path.string(), ": write failed"));
+    if (!os) throw std::runtime_error(io::cat(path.string(), ": write failed"));
   }
 }
 
-/// The logs of dir as a recording: sensor messages without truth, exactly sim::sensor_log of
+/// The logs of dir as a recording: sensor messages without truth, exactly sensor_log of
 /// the drive that was written, and the truth and labels apart. The logs hold no true range or
 /// NLOS bias per range (NaN in the UWB labels) and no fix errors (no fix labels).
 inline SimLogs read_sim_logs(const std::filesystem::path& dir) {
-  sim::DriveLog rows = sim_csv::read_drive_logs(dir);
+  DriveLog rows = csv::read_drive_logs(dir);
   SimLogs out;
   for (const auto& r : rows.uwb)
     out.truth.uwb.push_back({r.t, r.anchor_id, r.nlos, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()});
@@ -381,31 +377,15 @@ inline SimLogs read_sim_logs(const std::filesystem::path& dir) {
   out.truth.truth = std::move(rows.truth);
   // The messages come from the simulator's own conversion (sim/streams.hpp) on a drive that
   // holds only the logged streams, so that logs and simulator cannot drift apart.
-  sim::Drive d;
+  Drive d;
   d.imu = std::move(rows.imu);
   d.gnss = std::move(rows.gnss);
   d.sats = std::move(rows.sats);
   d.uwb = std::move(rows.uwb);
   d.speed = std::move(rows.speed);
   d.mag = std::move(rows.mag);
-  out.sensors = sim::sensor_log(d);
+  out.sensors = sensor_log(d);
   return out;
 }
 
-}  // namespace ctxfuse::io
-
-namespace ctxfuse::sim {
-// The names of the former sim/log_io.hpp, for the callers not yet on read_sim_logs.
-using LogError = io::ParseError;
-using io::write_drive_logs;
-using io::sim_csv::kGnssHeader;
-using io::sim_csv::kImuHeader;
-using io::sim_csv::kMagHeader;
-using io::sim_csv::kSatsHeader;
-using io::sim_csv::kSpeedHeader;
-using io::sim_csv::kTruthHeader;
-using io::sim_csv::kUwbHeader;
-using io::sim_csv::log_file_names;
-using io::sim_csv::read_drive_logs;
-using io::sim_csv::write_log;
 }  // namespace ctxfuse::sim

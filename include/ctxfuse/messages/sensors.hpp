@@ -1,6 +1,7 @@
 // Sensor messages: what a recording or the simulator delivers, and nothing more. No message
 // carries truth or labels (true ranges, NLOS flags, regions); those are separate records
-// that only eval/ and the CLI's scoring read (eval/truth.hpp). Every message is time-stamped
+// that only eval/ and the CLI's scoring read (sim::TruthLog, sim/records.hpp). The bottom
+// layer beside core/: every folder may include it. Every message is time-stamped
 // in seconds on one clock per log; the replay (io/replay.hpp) merges streams by that stamp.
 #pragma once
 
@@ -13,7 +14,7 @@
 #include <string>
 #include <vector>
 
-namespace ctxfuse::io {
+namespace ctxfuse::messages {
 
 inline constexpr double kUnknown = std::numeric_limits<double>::quiet_NaN();
 
@@ -115,4 +116,4 @@ struct SensorLog {
   std::vector<MagSample> mag;
 };
 
-}  // namespace ctxfuse::io
+}  // namespace ctxfuse::messages

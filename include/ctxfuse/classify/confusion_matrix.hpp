@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace ctxfuse::eval {
+namespace ctxfuse::classify {
 
 class ConfusionMatrix {
  public:
@@ -119,4 +119,4 @@ class ConfusionMatrix {
   std::size_t total_ = 0;
 };
 
-}  // namespace ctxfuse::eval
+}  // namespace ctxfuse::classify
