@@ -26,6 +26,7 @@ LAYERS = [
     ["pipelines"],
     ["sim"],
     ["eval"],
+    ["studies"],
     ["instances"],
     ["testing"],
 ]

@@ -19,7 +19,7 @@
 #include <filesystem>
 #include <string>
 
-#include "ctxfuse/eval/gins_outages.hpp"
+#include "ctxfuse/studies/gins_outages.hpp"
 #include "ctxfuse/instances/gins_nav20.hpp"
 
 #ifndef CTXFUSE_BENCH_DATA_DIR
@@ -28,7 +28,6 @@
 
 namespace {
 namespace gins = ctxfuse::pipelines::gins;
-namespace eval = ctxfuse::eval;
 
 std::filesystem::path drive_dir() {
   const char* env = std::getenv("CTXFUSE_DATA_DIR");
@@ -38,10 +37,10 @@ std::filesystem::path drive_dir() {
 
 gins::RunOptions drive_options() {
   gins::RunOptions o;
-  o.installation = eval::gnss_imu_drive_installation();
+  o.installation = ctxfuse::studies::gnss_imu_drive_installation();
   o.constraints.zupt = o.constraints.nhc = true;
-  o.outages = eval::standard_outages();
-  o.gnss_rate_hz = eval::kStandardGnssRateHz;
+  o.outages = ctxfuse::studies::standard_outages();
+  o.gnss_rate_hz = ctxfuse::studies::kStandardGnssRateHz;
   return o;
 }
 
@@ -78,7 +77,7 @@ const Drive& drive() {
       r.error = "the forward pass never aligned on " + dir.string();
       return r;
     }
-    const auto sc = eval::score_outages(r.rec.fixes, res);
+    const auto sc = ctxfuse::studies::score_outages(r.rec.fixes, res);
     r.forward_rms_m = sc.forward.rms;
     r.forward_max_m = sc.forward.max;
     return r;

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "cli/plot_data.hpp"
-#include "ctxfuse/eval/gins_outages.hpp"
+#include "ctxfuse/studies/gins_outages.hpp"
 #include "support/data_dir.hpp"
 #include "support/run_cli.hpp"
 
@@ -133,7 +133,7 @@ TEST(CliRunGins, OutagesOnTheRealDriveCsvAndJsonAgree) {
   std::string line;
   ASSERT_TRUE(std::getline(csv, line));
   EXPECT_EQ(line.rfind("gps_s,lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg,", 0), 0u) << line;
-  std::vector<ctxfuse::eval::TimedLatLon> traj;
+  std::vector<ctxfuse::studies::TimedLatLon> traj;
   constexpr double deg = 3.14159265358979323846 / 180.0;
   while (std::getline(csv, line)) {
     std::stringstream ss(line);
@@ -145,7 +145,7 @@ TEST(CliRunGins, OutagesOnTheRealDriveCsvAndJsonAgree) {
   const auto rec_fixes = ctxfuse::io::to_gnss_fixes(ctxfuse::io::read_rtklib_pos(dir / "gnss_1934_sf.pos"));
   std::vector<ctxfuse::pipelines::gins::OutageWindow> windows;
   for (const auto& w : doc.at("forward").at("outages")) windows.push_back({w.at("start").get<double>(), w.at("end").get<double>()});
-  const auto again = ctxfuse::eval::outage_errors(traj, ctxfuse::eval::rtk_fixed_reference(rec_fixes), windows);
+  const auto again = ctxfuse::studies::outage_errors(traj, ctxfuse::studies::rtk_fixed_reference(rec_fixes), windows);
   // Stamps to the ms (the fixes' own resolution) and 1e-10 deg (1e-5 m): the same figure.
   EXPECT_NEAR(again.rms, smoothed, 1e-4);
   fs::remove_all(tmp);

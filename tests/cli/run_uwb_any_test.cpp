@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "ctxfuse/eval/hanyang_protocol.hpp"
+#include "ctxfuse/studies/hanyang_protocol.hpp"
 #include "ctxfuse/sim/uwb_site.hpp"
 #include "support/data_dir.hpp"
 #include "support/run_cli.hpp"
@@ -174,7 +174,7 @@ TEST(CliScore, AuthorsFiguresFromTheirFiles) {
     EXPECT_EQ(j.at("protocol"), "trajectory_a");
     // Their own figure, from their RMSD_results.txt ("LS RMSE_2d: 0.97754..."); agreement to
     // 4e-8 m (their ns stamps against our seconds in doubles; tests/pipelines/nlos_uwb_eval_test).
-    const auto theirs = ctxfuse::eval::read_hanyang_rmsd(dir / "RMSD_results.txt");
+    const auto theirs = ctxfuse::studies::read_hanyang_rmsd(dir / "RMSD_results.txt");
     EXPECT_NEAR(j.at("rmse_2d_m").get<double>(), theirs.at(std::string(who) + " RMSE_2d"), 1e-6) << who;
   }
   fs::remove_all(tmp);

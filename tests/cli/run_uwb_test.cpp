@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "cli/plot_data.hpp"
-#include "ctxfuse/eval/hanyang_protocol.hpp"
+#include "ctxfuse/studies/hanyang_protocol.hpp"
 #include "support/data_dir.hpp"
 #include "support/run_cli.hpp"
 
@@ -56,7 +56,7 @@ TEST(CliRunUwb, TrajectoryAndMetricsOfOneCase) {
   std::string line;
   ASSERT_TRUE(std::getline(csv, line));
   EXPECT_EQ(line, "time_ns,x,y,z");
-  std::vector<ctxfuse::eval::TimedPoint2> est;
+  std::vector<ctxfuse::studies::TimedPoint2> est;
   while (std::getline(csv, line)) {
     std::stringstream ss(line);
     std::string f[4];
@@ -68,7 +68,7 @@ TEST(CliRunUwb, TrajectoryAndMetricsOfOneCase) {
   }
   EXPECT_EQ(static_cast<double>(est.size()), doc.at("estimates").get<double>());
   const auto ref = ctxfuse::io::read_hanyang_reference(dir);
-  const auto again = ctxfuse::eval::hanyang_rmse_2d(est, ref, ctxfuse::eval::trajectory_a_span());
+  const auto again = ctxfuse::studies::hanyang_rmse_2d(est, ref, ctxfuse::studies::trajectory_a_span());
   // Times written to the ns and positions to 17 digits: the same figure to rounding.
   EXPECT_NEAR(again.rmse_2d, ours, 1e-6);
   fs::remove_all(tmp);

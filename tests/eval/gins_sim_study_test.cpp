@@ -1,4 +1,4 @@
-// The GNSS/INS study's view of the simulated drive (eval/gins_sim_study.hpp): with an error-free
+// The GNSS/INS study's view of the simulated drive (studies/gins_sim_study.hpp): with an error-free
 // IMU, the converted increments (FLU -> FRD, ENU -> geodetic, the simulator's flat-site gravity
 // re-expressed at the filter's normal gravity) integrated by the filter's own simplified
 // strapdown from the true start follow the converted truth over the whole 9-minute drive. A
@@ -10,7 +10,7 @@
 
 #include <iostream>
 
-#include "ctxfuse/eval/gins_sim_study.hpp"
+#include "ctxfuse/studies/gins_sim_study.hpp"
 
 namespace {
 using namespace ctxfuse;
@@ -20,9 +20,9 @@ TEST(GinsSimStudy, ConvertedErrorFreeImuFollowsTheConvertedTruth) {
   cfg.seed = 3;
   cfg.imu.gyro_noise_density = cfg.imu.gyro_bias_sigma = cfg.imu.gyro_scale_sigma = 0.0;
   cfg.imu.accel_noise_density = cfg.imu.accel_bias_sigma = cfg.imu.accel_scale_sigma = 0.0;
-  const eval::GinsSimDrive d = eval::gins_sim_drive(sim::simulate_drive(cfg));
+  const ctxfuse::studies::GinsSimDrive d = ctxfuse::studies::gins_sim_drive(sim::simulate_drive(cfg));
   ASSERT_GT(d.t.size(), 50000u);
-  const eval::GinsSimBaseModel m;
+  const ctxfuse::studies::GinsSimBaseModel m;
   models::NavState x = d.truth.front();
   double max_h = 0.0, max_v = 0.0, max_heading = 0.0;
   for (std::size_t k = 1; k < d.t.size(); ++k) {
@@ -53,7 +53,7 @@ TEST(GinsSimStudy, ConvertedErrorFreeImuFollowsTheConvertedTruth) {
 TEST(GinsSimStudy, ErrorStatisticsFollowTheirDefinition) {
   std::vector<double> e;
   for (int i = 1; i <= 100; ++i) e.push_back(static_cast<double>(101 - i));  // 100 .. 1, unsorted order
-  const eval::HorizontalErrors h = eval::horizontal_errors(e);
+  const ctxfuse::studies::HorizontalErrors h = ctxfuse::studies::horizontal_errors(e);
   EXPECT_EQ(h.n, 100u);
   EXPECT_EQ(h.p67, 67.0);  // the smallest value with at least 67 % of the samples at or below it
   EXPECT_EQ(h.p75, 75.0);
@@ -72,18 +72,18 @@ TEST(GinsSimStudy, OdometerScaleBlockEstimatesTheDrawnScaleAndRemovesTheGarageDr
   sim::DriveConfig cfg;
   cfg.seed = 3;
   const sim::Drive drive = sim::simulate_drive(cfg);
-  const eval::GinsSimDrive d = eval::gins_sim_drive(drive);
+  const ctxfuse::studies::GinsSimDrive d = ctxfuse::studies::gins_sim_drive(drive);
   ASSERT_NEAR(d.speed_scale_truth, 0.0169, 5e-5);
   ASSERT_EQ(d.speed_scale_sigma, cfg.speed.scale_sigma);
-  const auto p = eval::true_scene_probabilities(eval::scene_samples(drive));  // unused by the fixed R
-  const eval::GinsSimScheme forward{"(c)", true, false, false}, smoothed{"(d)", true, false, true};
-  eval::GinsSimSettings held;
+  const auto p = ctxfuse::studies::true_scene_probabilities(ctxfuse::studies::scene_samples(drive));  // unused by the fixed R
+  const ctxfuse::studies::GinsSimScheme forward{"(c)", true, false, false}, smoothed{"(d)", true, false, true};
+  ctxfuse::studies::GinsSimSettings held;
   held.speed_scale_sigma = 0.0;
   const policies::FixedGnssNoise fixed(2.0);
-  const eval::GinsSimRun c = eval::run_gins_sim(d, cfg.imu, forward, fixed, p);
-  const eval::GinsSimRun c15 = eval::run_gins_sim(d, cfg.imu, forward, fixed, p, held);
-  const eval::GinsSimRun dd = eval::run_gins_sim(d, cfg.imu, smoothed, fixed, p);
-  const eval::GinsSimRun d15 = eval::run_gins_sim(d, cfg.imu, smoothed, fixed, p, held);
+  const ctxfuse::studies::GinsSimRun c = ctxfuse::studies::run_gins_sim(d, cfg.imu, forward, fixed, p);
+  const ctxfuse::studies::GinsSimRun c15 = ctxfuse::studies::run_gins_sim(d, cfg.imu, forward, fixed, p, held);
+  const ctxfuse::studies::GinsSimRun dd = ctxfuse::studies::run_gins_sim(d, cfg.imu, smoothed, fixed, p);
+  const ctxfuse::studies::GinsSimRun d15 = ctxfuse::studies::run_gins_sim(d, cfg.imu, smoothed, fixed, p, held);
   std::cout << "scale " << c.speed_scale << " (" << c.speed_scale_sigma << ") drawn " << d.speed_scale_truth
             << "; garage RMS forward " << c.indoor.rms << " vs " << c15.indoor.rms << " m, smoothed " << dd.indoor.rms << " vs "
             << d15.indoor.rms << " m\n";

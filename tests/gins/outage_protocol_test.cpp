@@ -1,11 +1,11 @@
-// The outage evaluation (eval/outage_protocol.hpp) and the GNSS schedule of the pipeline
+// The outage evaluation (studies/outage_protocol.hpp) and the GNSS schedule of the pipeline
 // (pipelines/gins/gnss_schedule.hpp) on hand-made inputs, checked exactly.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <vector>
 
-#include "ctxfuse/eval/outage_protocol.hpp"
+#include "ctxfuse/studies/outage_protocol.hpp"
 
 namespace {
 using namespace ctxfuse;
@@ -15,15 +15,15 @@ TEST(GinsOutageProtocol, StandardWindowsOnTheDrivesSpan) {
   // The drive's first and last GNSS epochs are 549 s apart: 40 + 45 k + 15 <= 549 - 30 for
   // k = 0..10 (k = 11 would end at 550), i.e. 11 windows.
   const double t0 = 1000.5;
-  const auto w = pipelines::gins::outage_windows(eval::standard_outages(), t0, t0 + 549.0);
+  const auto w = pipelines::gins::outage_windows(ctxfuse::studies::standard_outages(), t0, t0 + 549.0);
   ASSERT_EQ(w.size(), 11u);
   for (std::size_t k = 0; k < w.size(); ++k) {
     EXPECT_DOUBLE_EQ(w[k].start, t0 + 40.0 + 45.0 * static_cast<double>(k));
     EXPECT_DOUBLE_EQ(w[k].end, w[k].start + 15.0);
   }
   // The 11th window ends 505 s in: it needs the last epoch at least 535 s after the first.
-  EXPECT_EQ(pipelines::gins::outage_windows(eval::standard_outages(), t0, t0 + 535.0).size(), 11u);
-  EXPECT_EQ(pipelines::gins::outage_windows(eval::standard_outages(), t0, t0 + 534.9).size(), 10u);
+  EXPECT_EQ(pipelines::gins::outage_windows(ctxfuse::studies::standard_outages(), t0, t0 + 535.0).size(), 11u);
+  EXPECT_EQ(pipelines::gins::outage_windows(ctxfuse::studies::standard_outages(), t0, t0 + 534.9).size(), 10u);
   // Half-open: the start is inside, the end is not.
   EXPECT_TRUE(w[0].contains(t0 + 40.0));
   EXPECT_FALSE(w[0].contains(t0 + 55.0));
@@ -51,7 +51,7 @@ TEST(GinsOutageProtocol, ReferenceIsTheRtkFixedEpochsOnly) {
     fixes[i].position = {40.0 + i, -105.0, 1600.0};
     fixes[i].quality = q[i];
   }
-  const auto ref = eval::rtk_fixed_reference(fixes);
+  const auto ref = ctxfuse::studies::rtk_fixed_reference(fixes);
   ASSERT_EQ(ref.size(), 2u);
   EXPECT_EQ(ref[0].t, 0.0);
   EXPECT_EQ(ref[1].t, 3.0);
@@ -65,10 +65,10 @@ TEST(GinsOutageProtocol, InterpolatedErrorsRmsAndMax) {
   const double lat = 0.7, lon = -1.8;
   const Eigen::Vector3d per = earth::ned_per_llh(lat, 0.0);
   const double n = 1.0 / per(0), e = 1.0 / per(1);  // radians per metre
-  const std::vector<eval::TimedLatLon> traj{{0.0, lat + 3 * n, lon}, {2.0, lat + 1 * n, lon}, {4.0, lat, lon + 4 * e}};
-  const std::vector<eval::TimedLatLon> ref{{1.0, lat, lon}, {2.0, lat, lon}, {3.0, lat, lon}, {5.0, lat, lon}};
+  const std::vector<ctxfuse::studies::TimedLatLon> traj{{0.0, lat + 3 * n, lon}, {2.0, lat + 1 * n, lon}, {4.0, lat, lon + 4 * e}};
+  const std::vector<ctxfuse::studies::TimedLatLon> ref{{1.0, lat, lon}, {2.0, lat, lon}, {3.0, lat, lon}, {5.0, lat, lon}};
   const std::vector<OutageWindow> windows{{1.0, 4.0}};
-  const auto r = eval::outage_errors(traj, ref, windows);
+  const auto r = ctxfuse::studies::outage_errors(traj, ref, windows);
   ASSERT_EQ(r.epochs, 3u);
   EXPECT_EQ(r.unscored, 0u);
   const double e1 = 2.0, e2 = 1.0, e3 = std::hypot(0.5, 2.0);
@@ -78,7 +78,7 @@ TEST(GinsOutageProtocol, InterpolatedErrorsRmsAndMax) {
   EXPECT_EQ(r.outages[0].epochs, 3u);
   // A window past the trajectory's end: its reference epoch is counted as unscored.
   const std::vector<OutageWindow> late{{4.5, 6.0}};
-  const auto r2 = eval::outage_errors(traj, ref, late);
+  const auto r2 = ctxfuse::studies::outage_errors(traj, ref, late);
   EXPECT_EQ(r2.epochs, 0u);
   EXPECT_EQ(r2.unscored, 1u);
 }

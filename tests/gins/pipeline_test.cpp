@@ -8,7 +8,7 @@
 #include <cmath>
 #include <vector>
 
-#include "ctxfuse/eval/gins_outages.hpp"
+#include "ctxfuse/studies/gins_outages.hpp"
 #include "drive_sim.hpp"
 #include "ctxfuse/instances/gins_nav20.hpp"
 
@@ -23,7 +23,7 @@ struct SimRecording {
   std::vector<messages::ImuSample> imu;
   std::vector<messages::GnssFix> fixes;   // 4 Hz, 2 cm noise, the filter's input
   std::vector<messages::MagSample> mag;   // 10 Hz, IMU (= body) axes, 0.05 uT noise
-  std::vector<eval::TimedLatLon> truth;
+  std::vector<ctxfuse::studies::TimedLatLon> truth;
   std::vector<std::pair<double, double>> heading;  // (t, true heading [rad]) at each fix
 };
 
@@ -86,8 +86,8 @@ gins::RunResult run(gins::Constraints c, bool smooth, bool with_mag = false) {
   return gins::run<gins::Nav20>(recording().imu, recording().fixes, gins::Settings{}, o);
 }
 
-eval::OutageErrors errors(const gins::RunResult& r, const std::vector<gins::TrajectoryRow>& rows) {
-  return eval::outage_errors(eval::lat_lon_of(rows), recording().truth, r.windows);
+ctxfuse::studies::OutageErrors errors(const gins::RunResult& r, const std::vector<gins::TrajectoryRow>& rows) {
+  return ctxfuse::studies::outage_errors(ctxfuse::studies::lat_lon_of(rows), recording().truth, r.windows);
 }
 
 TEST(GinsPipeline, RowsAtEveryFixAndTheOutageWithheld) {

@@ -9,7 +9,7 @@
 #include <numbers>
 #include <vector>
 
-#include "ctxfuse/eval/gins_outages.hpp"
+#include "ctxfuse/studies/gins_outages.hpp"
 #include "ctxfuse/sim/platform_run.hpp"
 #include "ctxfuse/instances/gins_nav20.hpp"
 
@@ -114,18 +114,18 @@ TEST(PlatformRunSim, TheImuIntegratesToTheTruth) {
 
 struct Scored {
   gins::RunResult res;
-  eval::GinsOutageScores sc;
+  ctxfuse::studies::GinsOutageScores sc;
 };
 
 Scored run_outages(const sim::PlatformRun& r, gins::Platform platform, const gins::Constraints& cons) {
   const auto imu = imu_of(r);
   gins::RunOptions o;
   o.constraints = cons;
-  o.outages = eval::standard_outages();
-  o.gnss_rate_hz = eval::kStandardGnssRateHz;
+  o.outages = ctxfuse::studies::standard_outages();
+  o.gnss_rate_hz = ctxfuse::studies::kStandardGnssRateHz;
   Scored s;
   s.res = gins::run<gins::Nav20>(imu, r.fixes, gins::settings_for(platform), o);
-  s.sc = eval::score_outages(r.reference, s.res);
+  s.sc = ctxfuse::studies::score_outages(r.reference, s.res);
   return s;
 }
 

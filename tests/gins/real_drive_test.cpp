@@ -5,7 +5,7 @@
 // held to 2 % so that a change in the filter that moves them shows here.
 #include <gtest/gtest.h>
 
-#include "ctxfuse/eval/gins_outages.hpp"
+#include "ctxfuse/studies/gins_outages.hpp"
 #include "ctxfuse/instances/gins_nav20.hpp"
 #include "support/data_dir.hpp"
 
@@ -17,9 +17,9 @@ TEST(GinsRealDrive, OutageErrorsWithAndWithoutConstraints) {
   CTXFUSE_REQUIRE_DATA(dir, "gnss-imu-drive");
   const gins::Recording rec = gins::read_recording(dir);
   gins::RunOptions o;
-  o.installation = eval::gnss_imu_drive_installation();
-  o.outages = eval::standard_outages();
-  o.gnss_rate_hz = eval::kStandardGnssRateHz;
+  o.installation = ctxfuse::studies::gnss_imu_drive_installation();
+  o.outages = ctxfuse::studies::standard_outages();
+  o.gnss_rate_hz = ctxfuse::studies::kStandardGnssRateHz;
 
   const gins::RunResult none = gins::run<gins::Nav20>(rec.imu, rec.fixes, gins::Settings{}, o);
   o.constraints.zupt = o.constraints.nhc = true;
@@ -28,7 +28,7 @@ TEST(GinsRealDrive, OutageErrorsWithAndWithoutConstraints) {
   ASSERT_TRUE(none.aligned && both.aligned);
   ASSERT_TRUE(both.smooth_status.accepted());
   ASSERT_EQ(both.windows.size(), 11u);
-  const auto s_none = eval::score_outages(rec.fixes, none), s_both = eval::score_outages(rec.fixes, both);
+  const auto s_none = ctxfuse::studies::score_outages(rec.fixes, none), s_both = ctxfuse::studies::score_outages(rec.fixes, both);
   // The first window opens 2.2 s after the car first moves, before any alignment can happen.
   EXPECT_EQ(s_both.outages_scored, 10u);
   EXPECT_EQ(s_both.forward.epochs, 600u);

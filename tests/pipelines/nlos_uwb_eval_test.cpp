@@ -1,4 +1,4 @@
-// The authors' evaluation protocol (eval/hanyang_protocol.hpp) on a small example computed by
+// The authors' evaluation protocol (studies/hanyang_protocol.hpp) on a small example computed by
 // hand, the same protocol reproducing the authors' own RMSD_results.txt from their LS.csv and
 // ESKF.csv on every case (real data; skipped without it), the residual labels and the
 // identification scores on hand-made runs.
@@ -7,10 +7,9 @@
 #include <cmath>
 #include <vector>
 
-#include "ctxfuse/eval/nlos_uwb.hpp"
+#include "ctxfuse/studies/nlos_uwb.hpp"
 #include "support/data_dir.hpp"
 
-namespace ev = ctxfuse::eval;
 namespace nu = ctxfuse::pipelines::nlos_uwb;
 using ctxfuse::io::HanyangReferencePose;
 
@@ -35,14 +34,14 @@ TEST(HanyangProtocol, HandComputedSpanDropAndInterpolation) {
       pose(3, 20, 4, 0),
       pose(4, 10, 4, 0),   // span ends (t = 4)
       pose(5, 0, 0, 0)};
-  const std::vector<ev::TimedPoint2> est{
+  const std::vector<ctxfuse::studies::TimedPoint2> est{
       {0.5, {0, 0}},    // before the span: not scored
       {1.0, {50, 1}},   // ref (50, 0): error^2 = 1
       {2.0, {36, 2}},   // ref (35, 2): error^2 = 1
       {3.5, {15, 6}},   // ref (15, 4): error^2 = 4
       {4.0, {10, 4}},   // ref (10, 4): 0
       {4.5, {99, 99}}}; // after the span: not scored
-  const auto r = ev::hanyang_rmse_2d(est, ref, ev::trajectory_a_span());
+  const auto r = ctxfuse::studies::hanyang_rmse_2d(est, ref, ctxfuse::studies::trajectory_a_span());
   EXPECT_EQ(r.scored, 4u);
   EXPECT_DOUBLE_EQ(r.t_begin, 1.0);
   EXPECT_DOUBLE_EQ(r.t_end, 4.0);
@@ -53,16 +52,16 @@ TEST(HanyangProtocol, ReferenceHeldAtTheKeptEnds) {
   // The span's last sample is dropped (|z| = 0.6): estimates after the last kept sample (t = 3)
   // compare with it, held; likewise before the first kept one.
   const std::vector<HanyangReferencePose> ref{pose(1, 50, 0, 0.9), pose(2, 30, 0, 0), pose(3, 20, 4, 0), pose(4, 10, 4, 0.6)};
-  const std::vector<ev::TimedPoint2> est{{1.5, {30, 1}}, {3.5, {20, 6}}, {4.0, {23, 4}}};
-  const auto r = ev::hanyang_rmse_2d(est, ref, ev::trajectory_a_span());
+  const std::vector<ctxfuse::studies::TimedPoint2> est{{1.5, {30, 1}}, {3.5, {20, 6}}, {4.0, {23, 4}}};
+  const auto r = ctxfuse::studies::hanyang_rmse_2d(est, ref, ctxfuse::studies::trajectory_a_span());
   EXPECT_EQ(r.scored, 3u);
   EXPECT_NEAR(r.rmse_2d, std::sqrt((1.0 + 4.0 + 9.0) / 3.0), 1e-12);
 }
 
 TEST(HanyangProtocol, GatesNeverPassedIsAnError) {
   const std::vector<HanyangReferencePose> ref{pose(0, 0, 0, 0), pose(1, 50, 0, 0)};  // no end gate
-  const std::vector<ev::TimedPoint2> est{{0.5, {0, 0}}};
-  EXPECT_THROW(ev::hanyang_rmse_2d(est, ref, ev::trajectory_a_span()), std::invalid_argument);
+  const std::vector<ctxfuse::studies::TimedPoint2> est{{0.5, {0, 0}}};
+  EXPECT_THROW(ctxfuse::studies::hanyang_rmse_2d(est, ref, ctxfuse::studies::trajectory_a_span()), std::invalid_argument);
 }
 
 TEST(HanyangProtocol, ReproducesTheAuthorsFiguresOnEveryCase) {
@@ -71,10 +70,10 @@ TEST(HanyangProtocol, ReproducesTheAuthorsFiguresOnEveryCase) {
   for (const char* c : {"LOS/Trajectory_A/Case_1", "LOS/Trajectory_A/Case_2", "NLOS/Trajectory_A/Case_1", "NLOS/Trajectory_A/Case_2"}) {
     const auto dir = root / c;
     const auto ref = ctxfuse::io::read_hanyang_reference(dir);
-    const auto figures = ev::read_hanyang_rmsd(dir / "RMSD_results.txt");
+    const auto figures = ctxfuse::studies::read_hanyang_rmsd(dir / "RMSD_results.txt");
     for (const char* who : {"LS", "ESKF"}) {
-      const auto est = ev::read_hanyang_estimates(dir / (std::string(who) + ".csv"));
-      const auto r = ev::hanyang_rmse_2d(est, ref, ev::trajectory_a_span());
+      const auto est = ctxfuse::studies::read_hanyang_estimates(dir / (std::string(who) + ".csv"));
+      const auto r = ctxfuse::studies::hanyang_rmse_2d(est, ref, ctxfuse::studies::trajectory_a_span());
       // Agreement to 4e-8 m measured: our times are seconds in doubles (0.2 us steps at 1.7e9 s),
       // theirs nanoseconds, so interpolation weights differ in the 7th digit. 1e-6 m is the
       // bound: 100x below the 4 decimals the figures are quoted to, 25x above the difference.
@@ -93,14 +92,14 @@ TEST(NlosUwbLabels, ResidualAboveThreeSigmaIsNlos) {
   r.anchor_position = {0, 0, 1};
   r.t = 1.0;  // reference at x = 20
   r.range_m = 20.31;
-  EXPECT_NEAR(ev::range_residual(r, ref, s.tag_height_m), 0.31, 1e-9);
-  EXPECT_EQ(ev::residual_label(r, ref, s), nu::kNlosLabel);
+  EXPECT_NEAR(ctxfuse::studies::range_residual(r, ref, s.tag_height_m), 0.31, 1e-9);
+  EXPECT_EQ(ctxfuse::studies::residual_label(r, ref, s), nu::kNlosLabel);
   r.range_m = 20.29;
-  EXPECT_EQ(ev::residual_label(r, ref, s), nu::kLosLabel);
+  EXPECT_EQ(ctxfuse::studies::residual_label(r, ref, s), nu::kLosLabel);
   r.range_m = 19.0;  // short by 1 m: not NLOS (NLOS only lengthens a range)
-  EXPECT_EQ(ev::residual_label(r, ref, s), nu::kLosLabel);
+  EXPECT_EQ(ctxfuse::studies::residual_label(r, ref, s), nu::kLosLabel);
   r.t = 2.5;  // outside the reference: unlabelled
-  EXPECT_EQ(ev::residual_label(r, ref, s), -1);
+  EXPECT_EQ(ctxfuse::studies::residual_label(r, ref, s), -1);
 }
 
 TEST(NlosUwbLabels, IdentificationScoresByHand) {
@@ -122,7 +121,7 @@ TEST(NlosUwbLabels, IdentificationScoresByHand) {
     rec.verdict.p2 = p2[i];
     track.ranges.push_back(rec);
   }
-  const auto id = ev::identification(track, ref, nu::Settings{});
+  const auto id = ctxfuse::studies::identification(track, ref, nu::Settings{});
   EXPECT_DOUBLE_EQ(id.ds.precision, 0.5);
   EXPECT_DOUBLE_EQ(id.ds.recall, 0.5);
   EXPECT_DOUBLE_EQ(id.ds.accuracy, 0.6);
@@ -136,10 +135,10 @@ TEST(NlosUwbLabels, IdentificationScoresByHand) {
 TEST(NlosUwbLabels, SplitNeverHoldsTheScoredCase) {
   CTXFUSE_REQUIRE_DATA(root, "uwb-outdoor-hanyang/Dynamic_measurements");
   const auto scored = root / "NLOS/Trajectory_A/Case_1";
-  const auto others = ev::other_hanyang_cases(scored);
+  const auto others = ctxfuse::studies::other_hanyang_cases(scored);
   EXPECT_EQ(others.size(), 3u);  // the other three Trajectory_A cases
   for (const auto& o : others) EXPECT_NE(std::filesystem::weakly_canonical(o), std::filesystem::weakly_canonical(scored));
   std::vector<std::filesystem::path> with_self = others;
   with_self.push_back(scored);
-  EXPECT_THROW(ev::evaluate_nlos_uwb_case(scored, with_self, nu::Settings{}, ev::trajectory_a_span()), std::invalid_argument);
+  EXPECT_THROW(ctxfuse::studies::evaluate_nlos_uwb_case(scored, with_self, nu::Settings{}, ctxfuse::studies::trajectory_a_span()), std::invalid_argument);
 }

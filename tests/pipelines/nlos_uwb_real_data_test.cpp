@@ -17,10 +17,9 @@
 #include <cstdio>
 #include <string>
 
-#include "ctxfuse/eval/nlos_uwb.hpp"
+#include "ctxfuse/studies/nlos_uwb.hpp"
 #include "support/data_dir.hpp"
 
-namespace ev = ctxfuse::eval;
 namespace nu = ctxfuse::pipelines::nlos_uwb;
 
 namespace {
@@ -53,9 +52,9 @@ class NlosUwbRealData : public ::testing::TestWithParam<Expected> {};
 TEST_P(NlosUwbRealData, BelowTheAuthorsWhereMeasuredSo) {
   const Expected& x = GetParam();
   CTXFUSE_REQUIRE_DATA(dir, std::string("uwb-outdoor-hanyang/Dynamic_measurements/") + x.dir);
-  const auto training = ev::other_hanyang_cases(dir);
+  const auto training = ctxfuse::studies::other_hanyang_cases(dir);
   ASSERT_EQ(training.size(), 3u);
-  const auto rep = ev::evaluate_nlos_uwb_case(dir, training, nu::Settings{}, ev::trajectory_a_span());
+  const auto rep = ctxfuse::studies::evaluate_nlos_uwb_case(dir, training, nu::Settings{}, ctxfuse::studies::trajectory_a_span());
   ASSERT_TRUE(rep.svm);
   const double authors_ls = rep.authors.at("LS RMSE_2d"), authors_eskf = rep.authors.at("ESKF RMSE_2d");
   const double best_authors = std::min(authors_ls, authors_eskf);
@@ -200,7 +199,7 @@ TEST(NlosUwbRealDataDiagnostics, AnchorBiasesAndAveragingEachHelp) {
       s.anchor_bias_sigma_m = (v == 1 || v == 3) ? s.anchor_bias_sigma_m : 0.0;
       s.range_average_samples = (v == 2 || v == 3) ? s.range_average_samples : 1;
       const auto t = nu::run(rs, nu::CalibratedRangeEkf<>(s), nu::NoNlosHandling{}, nu::NlosClassifier(s), s);
-      rmse[c][static_cast<std::size_t>(v)] = ev::hanyang_rmse_2d(ev::timed_points(t), ref, ev::trajectory_a_span()).rmse_2d;
+      rmse[c][static_cast<std::size_t>(v)] = ctxfuse::studies::hanyang_rmse_2d(ctxfuse::studies::timed_points(t), ref, ctxfuse::studies::trajectory_a_span()).rmse_2d;
     }
     std::printf("%s: plain %.3f, anchor biases %.3f, averaging %.3f, both %.3f m\n", kCases[c].dir, rmse[c][0], rmse[c][1],
                 rmse[c][2], rmse[c][3]);
@@ -221,13 +220,13 @@ TEST(NlosUwbRealDataDiagnostics, TimeOffsetGeometryAndProcessNoise) {
   const auto ranges = ctxfuse::io::read_hanyang_uwb(dir).uwb_ranges();
   const auto ref = ctxfuse::io::read_hanyang_reference(dir);
   const std::span<const ctxfuse::messages::UwbRange> rs(ranges);
-  const auto span = ev::trajectory_a_span();
+  const auto span = ctxfuse::studies::trajectory_a_span();
   const auto ekf = nu::run(rs, nu::RangeEkf<>(s), nu::NoNlosHandling{}, nu::NlosClassifier(s), s);
   const auto ls = nu::least_squares_track(rs, s);
   auto shifted = [&](const nu::Track& t, double shift) {
-    auto pts = ev::timed_points(t);
+    auto pts = ctxfuse::studies::timed_points(t);
     for (auto& p : pts) p.t += shift;
-    return ev::hanyang_rmse_2d(pts, ref, span).rmse_2d;
+    return ctxfuse::studies::hanyang_rmse_2d(pts, ref, span).rmse_2d;
   };
   // (1) A time offset between ranges and reference: both the EKF and the filter-free LS are
   // best with their times moved 0.4 s earlier, by the same amount: not filter lag.
@@ -243,11 +242,11 @@ TEST(NlosUwbRealDataDiagnostics, TimeOffsetGeometryAndProcessNoise) {
   auto along_mean = [&](double shift) {
     double sum = 0.0;
     int n = 0;
-    const auto r = ev::hanyang_rmse_2d(ev::timed_points(ekf), ref, span);
+    const auto r = ctxfuse::studies::hanyang_rmse_2d(ctxfuse::studies::timed_points(ekf), ref, span);
     for (const auto& e : ekf.estimates) {
       const double t = e.t + shift;
       if (t < r.t_begin || t > r.t_end) continue;
-      const Eigen::Vector3d a = ev::reference_at(ref, t), b = ev::reference_at(ref, t + 0.2);
+      const Eigen::Vector3d a = ctxfuse::studies::reference_at(ref, t), b = ctxfuse::studies::reference_at(ref, t + 0.2);
       const Eigen::Vector2d d = (b - a).head<2>();
       if (!(d.norm() > 0.05)) continue;  // standing: no along-track direction
       sum += (e.position - a.head<2>()).dot(d.normalized());
@@ -261,12 +260,12 @@ TEST(NlosUwbRealDataDiagnostics, TimeOffsetGeometryAndProcessNoise) {
   EXPECT_LT(std::abs(along4), 0.1);
   // (2) Geometry: the error grows with the distance from the anchors (1.9 x 1.7 m apart).
   auto by_distance = [&](const nu::Track& track) {
-    const auto r = ev::hanyang_rmse_2d(ev::timed_points(track), ref, span);
+    const auto r = ctxfuse::studies::hanyang_rmse_2d(ctxfuse::studies::timed_points(track), ref, span);
     std::array<double, 7> sq{};
     std::array<int, 7> n{};
     for (const auto& e : track.estimates) {
       if (e.t < r.t_begin || e.t > r.t_end) continue;
-      const Eigen::Vector3d p = ev::reference_at(ref, e.t);
+      const Eigen::Vector3d p = ctxfuse::studies::reference_at(ref, e.t);
       const auto bin = static_cast<std::size_t>(std::min(6.0, std::hypot(p.x() - 2.0, p.y()) / 8.0));
       sq[bin] += (e.position - p.head<2>()).squaredNorm();
       ++n[bin];
@@ -299,7 +298,7 @@ TEST(NlosUwbRealDataDiagnostics, TimeOffsetGeometryAndProcessNoise) {
   // Gross ranges: the largest range residual against the reference, in metres.
   double worst = 0.0;
   for (const auto& rec : ekf.ranges)
-    if (const double e = ev::range_residual(rec.range, ref, s.tag_height_m); std::abs(e) > std::abs(worst)) worst = e;
+    if (const double e = ctxfuse::studies::range_residual(rec.range, ref, s.tag_height_m); std::abs(e) > std::abs(worst)) worst = e;
   std::printf("largest range residual %.2f m\n", worst);
   EXPECT_GT(std::abs(worst), 10.0);
   // (3) Not the process noise: q ten times smaller or three times larger moves it < 3 %.
@@ -307,7 +306,7 @@ TEST(NlosUwbRealDataDiagnostics, TimeOffsetGeometryAndProcessNoise) {
     nu::Settings sq_settings;
     sq_settings.accel_psd = q;
     const auto t = nu::run(rs, nu::RangeEkf<>(sq_settings), nu::NoNlosHandling{}, nu::NlosClassifier(sq_settings), sq_settings);
-    const double e = ev::hanyang_rmse_2d(ev::timed_points(t), ref, span).rmse_2d;
+    const double e = ctxfuse::studies::hanyang_rmse_2d(ctxfuse::studies::timed_points(t), ref, span).rmse_2d;
     std::printf("q = %.1f m^2/s^3: %.3f m (q = 1: %.3f m)\n", q, e, ekf0);
     EXPECT_NEAR(e, ekf0, 0.03 * ekf0);
   }

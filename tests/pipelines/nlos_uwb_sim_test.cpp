@@ -1,4 +1,4 @@
-// The NLOS paper's simulation protocol (eval/nlos_uwb_sim.hpp) on a short simulated drive
+// The NLOS paper's simulation protocol (studies/nlos_uwb_sim.hpp) on a short simulated drive
 // (one garage lap, one training drive, 200 SVM rows per class: test sizes; the full-size numbers are
 // in docs/results.md, section nlos_uwb_sim). Asserts the protocol's properties and the
 // orderings that hold on every seed measured, not the paper's figures.
@@ -8,27 +8,27 @@
 #include <cstdio>
 #include <utility>
 
-#include "ctxfuse/eval/nlos_uwb_sim.hpp"
+#include "ctxfuse/studies/nlos_uwb_sim.hpp"
 
 namespace {
 using namespace ctxfuse;
 namespace nu = pipelines::nlos_uwb;
 
-eval::NlosSimReport short_drive_report(double episode_mean_s) {
+ctxfuse::studies::NlosSimReport short_drive_report(double episode_mean_s) {
     sim::DriveConfig base;
     base.route.duration_s = 150.0;
     base.route.indoor_laps = 1;
-    eval::NlosSimProtocol p;
+    ctxfuse::studies::NlosSimProtocol p;
     p.training_seed_offsets = {101};
     p.episode_mean_s = episode_mean_s;
     nu::Settings s;
     s.svm_rows_per_class = 200;
-    return eval::evaluate_nlos_uwb_sim(base, 1, p, s);
+    return ctxfuse::studies::evaluate_nlos_uwb_sim(base, 1, p, s);
 }
 
-void print(const char* what, const eval::NlosSimReport& r) {
+void print(const char* what, const ctxfuse::studies::NlosSimReport& r) {
   std::printf("%s: %zu ranges, %.1f %% NLOS\n", what, r.ranges, 100.0 * r.nlos_share());
-  const std::pair<const char*, const eval::Identification*> ids[] = {{"svm_vu", &r.svm_vu}, {"svm", &r.svm}, {"consistency", &r.consistency}, {"ds", &r.ds}};
+  const std::pair<const char*, const ctxfuse::studies::Identification*> ids[] = {{"svm_vu", &r.svm_vu}, {"svm", &r.svm}, {"consistency", &r.consistency}, {"ds", &r.ds}};
   for (const auto& [name, id] : ids)
     std::printf("  %-12s P %.2f R %.2f A %.2f %%\n", name, 100 * id->precision, 100 * id->recall, 100 * id->accuracy);
   for (const auto& v : r.variants)
@@ -36,8 +36,8 @@ void print(const char* what, const eval::NlosSimReport& r) {
                 v.errors.horizontal.max, v.errors.horizontal.std, v.errors.horizontal.at(50));
 }
 
-const eval::NlosSimReport& report() {
-  static const eval::NlosSimReport rep = [] {
+const ctxfuse::studies::NlosSimReport& report() {
+  static const ctxfuse::studies::NlosSimReport rep = [] {
     auto r = short_drive_report(std::nan(""));
     print("simulator's 1.5 s NLOS episodes", r);
     return r;

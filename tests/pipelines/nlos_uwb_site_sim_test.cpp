@@ -16,13 +16,12 @@
 #include <filesystem>
 #include <vector>
 
-#include "ctxfuse/eval/nlos_uwb.hpp"
+#include "ctxfuse/studies/nlos_uwb.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/recording.hpp"
 #include "ctxfuse/sim/uwb_site.hpp"
 
 namespace nu = ctxfuse::pipelines::nlos_uwb;
 namespace sim = ctxfuse::sim;
-namespace ev = ctxfuse::eval;
 
 namespace {
 
@@ -180,8 +179,8 @@ TEST(UwbSite, MixedRatesOneToHundredHertz) {
   EXPECT_TRUE(f.averaging_detected) << f.averaging_note;
   EXPECT_EQ(s.range_average_samples, 1);
   const std::string_view names[] = {"calibrated_ekf_gate_per_range", "least_squares"};
-  auto variants = ev::run_nlos_uwb_variants(ranges, nu::NlosClassifier(s), s, names);
-  ev::score_nlos_uwb_variants(variants, sim::hanyang_reference(path, w.tag_height_m), ev::choose_protocol("none", {}));
+  auto variants = ctxfuse::studies::run_nlos_uwb_variants(ranges, nu::NlosClassifier(s), s, names);
+  ctxfuse::studies::score_nlos_uwb_variants(variants, sim::hanyang_reference(path, w.tag_height_m), ctxfuse::studies::choose_protocol("none", {}));
   std::printf("mixed 1-100 Hz: calibrated EKF %.4f m, least squares %.4f m\n", variants[0].rmse.rmse_2d, variants[1].rmse.rmse_2d);
   EXPECT_LT(variants[0].rmse.rmse_2d, 0.5 * variants[1].rmse.rmse_2d);
 }
@@ -208,10 +207,10 @@ TEST(UwbSite, IndoorYardCalibratedEkfBeatsLeastSquares) {
   EXPECT_EQ(s.range_average_samples, 1);
   const nu::NlosClassifier classifier(s);  // no labelled data: the consistency check alone
   const std::string_view names[] = {"calibrated_ekf_gate_per_range", "least_squares"};
-  auto variants = ev::run_nlos_uwb_variants(ranges, classifier, s, names);
-  const auto protocol = ev::choose_protocol("auto", ref);  // a yard: neither Hanyang span
+  auto variants = ctxfuse::studies::run_nlos_uwb_variants(ranges, classifier, s, names);
+  const auto protocol = ctxfuse::studies::choose_protocol("auto", ref);  // a yard: neither Hanyang span
   EXPECT_EQ(protocol.name, "whole_run");
-  ev::score_nlos_uwb_variants(variants, ref, protocol);
+  ctxfuse::studies::score_nlos_uwb_variants(variants, ref, protocol);
   const double ekf = variants[0].rmse.rmse_2d, ls = variants[1].rmse.rmse_2d;
   std::printf("indoor yard, 8 anchors at 100 Hz, biases 0.1-0.3 m: calibrated EKF %.4f m (%zu scored), least squares %.4f m (%zu)\n",
               ekf, variants[0].rmse.scored, ls, variants[1].rmse.scored);

@@ -1,5 +1,5 @@
 // `ctxfuse demo` sections "scene_gins" (paper B) and "phone_gins" (paper D): the GNSS/INS study
-// of eval/gins_sim_study.hpp on the demo's drive, beside the papers' figures. One study serves
+// of studies/gins_sim_study.hpp on the demo's drive, beside the papers' figures. One study serves
 // both sections: scheme (a) with fixed, scene-adaptive (classifier) and true-scene R is paper
 // B's comparison; schemes (a)-(d), and the ZIHR variants, are paper D's. docs/results.md
 // (section gins_sim) explains the rows; `ctxfuse gins-study` prints the same study per seed.
@@ -16,17 +16,17 @@ namespace ctxfuse::cli {
 namespace {
 
 /// The study of the drive the demo runs (both sections see the same drive object).
-const eval::GinsSimStudy& study_for(const sim::Drive& d) {
+const ctxfuse::studies::GinsSimStudy& study_for(const sim::Drive& d) {
   static const sim::Drive* cached_for = nullptr;
-  static std::unique_ptr<eval::GinsSimStudy> cached;
+  static std::unique_ptr<ctxfuse::studies::GinsSimStudy> cached;
   if (!cached || cached_for != &d) {
-    cached = std::make_unique<eval::GinsSimStudy>(gins_study_of(d));
+    cached = std::make_unique<ctxfuse::studies::GinsSimStudy>(gins_study_of(d));
     cached_for = &d;
   }
   return *cached;
 }
 
-const eval::GinsSimRun* find_run(const eval::GinsSimStudy& st, std::string_view scheme_prefix, std::string_view noise) {
+const ctxfuse::studies::GinsSimRun* find_run(const ctxfuse::studies::GinsSimStudy& st, std::string_view scheme_prefix, std::string_view noise) {
   for (const auto& r : st.runs)
     if (r.scheme.name.starts_with(scheme_prefix) && r.noise == noise) return &r;
   return nullptr;
@@ -40,7 +40,7 @@ constexpr NoiseRow kNoises[] = {{"fixed", "fixed"}, {"scene (classifier)", "scen
 
 // Paper B: the scene-adaptive R of eq. 20-21 against a fixed R, horizontal error at 67 %.
 void scene_gins_section(const DemoContext& ctx, Json& j, std::ostream& out) {
-  const eval::GinsSimStudy& st = study_for(*ctx.drive);
+  const ctxfuse::studies::GinsSimStudy& st = study_for(*ctx.drive);
   out << formatted("  GNSS/INS (simplified strapdown, 15 states + the odometer's scale error, fixes at 1 Hz, 99.9 %% gate),\n"
                    "  forward filter; horizontal error at the 1 Hz truth epochs of the whole drive (the garage has no fix).\n"
                    "  Scene classifier (linear SVM, 8 features, Platt, trained on seeds N+101..N+103): %.2f %% of the epochs\n"
@@ -51,7 +51,7 @@ void scene_gins_section(const DemoContext& ctx, Json& j, std::ostream& out) {
   j["paper_scene_accuracy"] = 0.903;
   const double paper[] = {11.23, 8.59, -1.0};
   for (std::size_t i = 0; i < std::size(kNoises); ++i) {
-    const eval::GinsSimRun* r = find_run(st, "(a)", kNoises[i].noise);
+    const ctxfuse::studies::GinsSimRun* r = find_run(st, "(a)", kNoises[i].noise);
     if (!r) continue;
     out << formatted("  %-22s | %-9.2f %-9.2f %-9.2f | %-9.2f %-10.2f | %5d/%-10d | %s\n", kNoises[i].noise, r->all.p67, r->all.rms,
                      r->all.max, r->with_gnss.rms, r->indoor.rms, r->fixes_used, r->fixes_gated,
@@ -76,7 +76,7 @@ constexpr PaperScheme kPaperSchemes[] = {{"(a)", "a_gnss_ins", 131.52, 669.86},
 
 // Paper D: (a) GNSS/INS, (b) + RTS, (c) + ZUPT/NHC with the odometer's speed, (d) + both.
 void phone_gins_section(const DemoContext& ctx, Json& j, std::ostream& out) {
-  const eval::GinsSimStudy& st = study_for(*ctx.drive);
+  const ctxfuse::studies::GinsSimStudy& st = study_for(*ctx.drive);
   out << formatted("  The same filter with ZUPT while static, NHC + odometer speed (scale error estimated) while moving (10 Hz),\n"
                    "  RTS over 10 Hz records.\n"
                    "  Static while moving: raw-IMU detector %.2f %%, with the odometer (the decision used) %.2f %% of the samples\n",
@@ -86,7 +86,7 @@ void phone_gins_section(const DemoContext& ctx, Json& j, std::ostream& out) {
   j["false_static_share_odometer"] = st.false_static_share_odometer;
   for (const auto& p : kPaperSchemes) {
     for (std::size_t i = 0; i < 2; ++i) {  // fixed and the classifier's scene R
-      const eval::GinsSimRun* r = find_run(st, p.prefix, kNoises[i].noise);
+      const ctxfuse::studies::GinsSimRun* r = find_run(st, p.prefix, kNoises[i].noise);
       if (!r) continue;
       out << formatted("  %-35s | %-18s | %-9.2f %-9.2f %-9.2f | %-10.2f | %s\n", r->scheme.name.c_str(), kNoises[i].noise, r->all.p75,
                        r->all.rms, r->all.max, r->indoor.rms,

@@ -1,4 +1,4 @@
-// `ctxfuse gins-study`: the papers' GNSS/INS schemes on simulated drives (eval/gins_sim_study.hpp):
+// `ctxfuse gins-study`: the papers' GNSS/INS schemes on simulated drives (studies/gins_sim_study.hpp):
 // (a) GNSS/INS, (b) + RTS, (c) + constraints, (d) + both, with ZIHR as extra rows, each with a
 // fixed GNSS R, the scene-adaptive R from the trained scene classifier, and the scene-adaptive
 // R from the true scenes (oracle). Horizontal error at the 1 Hz truth epochs: RMS, 67 %, 75 %,
@@ -17,13 +17,13 @@
 #include "cli/options.hpp"
 #include "cli/registry.hpp"
 #include "cli/seed_list.hpp"
-#include "ctxfuse/eval/gins_sim_study.hpp"
+#include "ctxfuse/studies/gins_sim_study.hpp"
 #include "ctxfuse/sim/drive.hpp"
 
 namespace ctxfuse::cli {
 
-eval::GinsSimStudy gins_study_of(const sim::Drive& drive, const eval::GinsSimSettings& settings) {
-  return eval::gins_sim_study(drive, settings);
+ctxfuse::studies::GinsSimStudy gins_study_of(const sim::Drive& drive, const ctxfuse::studies::GinsSimSettings& settings) {
+  return ctxfuse::studies::gins_sim_study(drive, settings);
 }
 
 namespace {
@@ -37,7 +37,7 @@ int gins_study(Args args, std::ostream& out, std::ostream& err) {
   std::string seeds_text = "1", json_file;
   app.add_option("--seeds", seeds_text, "seeds, e.g. 1-5, 1,3,7 or 1-3,9");
   app.add_option("--json", json_file, "every printed number also as JSON");
-  eval::GinsSimSettings settings;
+  ctxfuse::studies::GinsSimSettings settings;
   double speed_scale_sigma = -1.0;
   app.add_option("--speed-scale-sigma", speed_scale_sigma,
                  "prior sigma of the odometer's scale error (default: its data sheet, 0.01); 0: not estimated (15 states)")
@@ -56,7 +56,7 @@ int gins_study(Args args, std::ostream& out, std::ostream& err) {
   for (const std::uint64_t seed : seeds) {
     sim::DriveConfig cfg;
     cfg.seed = seed;
-    const eval::GinsSimStudy st = gins_study_of(sim::simulate_drive(cfg), settings);
+    const ctxfuse::studies::GinsSimStudy st = gins_study_of(sim::simulate_drive(cfg), settings);
     out << formatted("\n=== seed %llu: %zu IMU samples, %zu fixes; scene classifier accuracy %.2f %%; static while moving: "
                      "IMU detector %.2f %%, with the odometer %.2f %% of moving samples; odometer scale error drawn %+.4f\n",
                      static_cast<unsigned long long>(seed), st.imu_samples, st.fixes, 100.0 * st.scene_accuracy,

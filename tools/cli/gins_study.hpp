@@ -1,18 +1,18 @@
-// The GNSS/INS study (eval/gins_sim_study.hpp) as `ctxfuse gins-study` (gins_study.cpp) and the
+// The GNSS/INS study (studies/gins_sim_study.hpp) as `ctxfuse gins-study` (gins_study.cpp) and the
 // demo's scene_gins / phone_gins sections (gins_demo.cpp) share it: the study of one drive,
 // compiled once in gins_study.cpp (its instantiation costs a minute of compile CPU), and the
 // JSON of its error statistics.
 #pragma once
 
 #include "cli/json.hpp"
-#include "ctxfuse/eval/gins_sim_study.hpp"
+#include "ctxfuse/studies/gins_sim_study.hpp"
 
 namespace ctxfuse::cli {
 
-/// eval::gins_sim_study on `drive` (defined in gins_study.cpp).
-eval::GinsSimStudy gins_study_of(const sim::Drive& drive, const eval::GinsSimSettings& settings = {});
+/// ctxfuse::studies::gins_sim_study on `drive` (defined in gins_study.cpp).
+ctxfuse::studies::GinsSimStudy gins_study_of(const sim::Drive& drive, const ctxfuse::studies::GinsSimSettings& settings = {});
 
-inline Json gins_errors_json(const eval::HorizontalErrors& e) {
+inline Json gins_errors_json(const ctxfuse::studies::HorizontalErrors& e) {
   Json j;
   j["n"] = static_cast<double>(e.n);
   j["rms_m"] = e.rms;
@@ -24,7 +24,7 @@ inline Json gins_errors_json(const eval::HorizontalErrors& e) {
 
 /// One scheme with one noise policy into `j`: the whole drive, the part with GNSS, the garage,
 /// the fixes used and gated, the forward filter's odometer scale error at the end.
-inline void add_gins_run_json(const eval::GinsSimRun& r, Json& j) {
+inline void add_gins_run_json(const ctxfuse::studies::GinsSimRun& r, Json& j) {
   if (r.scheme.smooth) j["smoothed"] = r.smoothed;
   j["speed_scale"] = r.speed_scale;
   j["speed_scale_sigma"] = r.speed_scale_sigma;

@@ -1,5 +1,5 @@
 // `ctxfuse demo` sections "nlos_uwb" and "latency_us" (paper C): the NLOS paper's simulation
-// protocol on the demo's drive (eval/nlos_uwb_sim.hpp: same route and sensors, half the ranges
+// protocol on the demo's drive (studies/nlos_uwb_sim.hpp: same route and sensors, half the ranges
 // NLOS with a 1-2 m bias, SVMs trained on seeds + 101 and + 102), its identification and
 // positioning tables beside the paper's, and an indicative in-process timing of the per-sample
 // steps beside the paper's Table 5 (the reference numbers are bench_per_sample's, in
@@ -20,7 +20,7 @@
 #include "cli/registry.hpp"
 #include "cli/uwb_plots.hpp"
 #include "ctxfuse/classify/dempster_shafer.hpp"
-#include "ctxfuse/eval/nlos_uwb_sim.hpp"
+#include "ctxfuse/studies/nlos_uwb_sim.hpp"
 
 namespace ctxfuse::cli {
 namespace {
@@ -33,10 +33,10 @@ Json numbers(std::initializer_list<double> v) {
 }
 
 /// One study per seed, shared by both sections (the latency section times the same models).
-const eval::NlosSimReport& study_for(const sim::Drive& d) {
-  static std::map<std::uint64_t, std::unique_ptr<eval::NlosSimReport>> cache;
+const ctxfuse::studies::NlosSimReport& study_for(const sim::Drive& d) {
+  static std::map<std::uint64_t, std::unique_ptr<ctxfuse::studies::NlosSimReport>> cache;
   auto& slot = cache[d.config.seed];
-  if (!slot) slot = std::make_unique<eval::NlosSimReport>(eval::evaluate_nlos_uwb_sim(d.config, d.config.seed));
+  if (!slot) slot = std::make_unique<ctxfuse::studies::NlosSimReport>(ctxfuse::studies::evaluate_nlos_uwb_sim(d.config, d.config.seed));
   return *slot;
 }
 
@@ -81,7 +81,7 @@ std::vector<double> errors_2d(std::span<const eval::TimedPosition> est, std::spa
 // --plot: the gated graph with the paper's rule (the report keeps its whole run) against the
 // truth, scored over the section's span like its table row; the CDF beside LS, the graph
 // without and with the rule (ungated; constant velocity and IMU factors), and the gated EKF.
-void plot_section(const sim::Drive& d, const eval::NlosSimReport& r, Plotter& plotter) {
+void plot_section(const sim::Drive& d, const ctxfuse::studies::NlosSimReport& r, Plotter& plotter) {
   UwbPlots p;
   p.prefix = "nlos_uwb";
   p.estimator = "graph_gate_paper_rule";
@@ -107,7 +107,7 @@ void plot_section(const sim::Drive& d, const eval::NlosSimReport& r, Plotter& pl
 }
 
 void nlos_uwb_section(const DemoContext& ctx, Json& json, std::ostream& out) {
-  const eval::NlosSimReport& r = study_for(*ctx.drive);
+  const ctxfuse::studies::NlosSimReport& r = study_for(*ctx.drive);
   char buf[512];
   std::snprintf(buf, sizeof buf,
                 "Paper C's protocol on this drive: %zu ranges, %.1f %% NLOS (transient chain 0.5 + wall crossings, bias 1-2 m);\n"
@@ -127,7 +127,7 @@ void nlos_uwb_section(const DemoContext& ctx, Json& json, std::ostream& out) {
   json["svm_vu_gamma"] = r.svm_vu_model.gamma;
   json["span_s"] = numbers({r.span_start, r.span_end});
   out << "  NLOS identification (%)   precision  recall  accuracy   paper: P / R / A\n";
-  const eval::Identification* ours[] = {&r.svm_vu, &r.svm, &r.consistency, &r.ds};
+  const ctxfuse::studies::Identification* ours[] = {&r.svm_vu, &r.svm, &r.consistency, &r.ds};
   Json& ident = json["identification"];
   for (std::size_t i = 0; i < 4; ++i) {
     const auto& p = kPaperId[i];
@@ -180,7 +180,7 @@ double mean_us(std::size_t n, F&& f) {
 }
 
 void latency_section(const DemoContext& ctx, Json& json, std::ostream& out) {
-  const eval::NlosSimReport& r = study_for(*ctx.drive);
+  const ctxfuse::studies::NlosSimReport& r = study_for(*ctx.drive);
   const nu::Settings s;
   const auto& records = r.proposed.ranges;
   std::vector<nu::SvmInput> inputs;

@@ -1,14 +1,14 @@
 // `ctxfuse demo` section "region_imm": the region paper's tables on the simulated drive
 // (cli/region_imm_report.hpp). The drive runs as the streams a recording would hold
 // (sim::sensor_log); training and validation of the recogniser use other simulated drives
-// (eval/region_training.hpp: seeds + 101, + 102 and + 103 train, seed + 202 validates), as the
+// (studies/region_training.hpp: seeds + 101, + 102 and + 103 train, seed + 202 validates), as the
 // paper trains, validates and tests on separate data.
 #include <ostream>
 #include <string>
 
 #include "cli/region_imm_report.hpp"
 #include "cli/registry.hpp"
-#include "ctxfuse/eval/region_training.hpp"
+#include "ctxfuse/studies/region_training.hpp"
 #include "ctxfuse/sim/streams.hpp"
 
 namespace ctxfuse::cli {
@@ -16,7 +16,7 @@ namespace {
 
 void run_section(const DemoContext& ctx, Json& json, std::ostream& out) {
   const sim::Drive& test = *ctx.drive;
-  using Drives = eval::RegionTrainingDrives;
+  using Drives = ctxfuse::studies::RegionTrainingDrives;
   const auto seed = test.config.seed;
   const messages::SensorLog log = sim::sensor_log(test);
   const sim::TruthLog truth = sim::truth_log(test);

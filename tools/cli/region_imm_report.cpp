@@ -11,7 +11,7 @@
 #include "cli/formatted.hpp"
 #include "ctxfuse/instances/region_imm.hpp"  // run() compiled once (ctxfuse::instances)
 #include "ctxfuse/eval/region_errors.hpp"
-#include "ctxfuse/eval/region_training.hpp"
+#include "ctxfuse/studies/region_training.hpp"
 
 namespace ctxfuse::cli {
 
@@ -19,7 +19,7 @@ ri::RunResult run_region_pipeline(const messages::SensorLog& log, ri::Estimator 
   return ri::run(log, e, s, o);
 }
 
-ri::Recogniser train_region_recogniser(const sim::DriveConfig& test) { return eval::train_recogniser_for(test); }
+ri::Recogniser train_region_recogniser(const sim::DriveConfig& test) { return ctxfuse::studies::train_recogniser_for(test); }
 
 ri::Recogniser train_region_recogniser(std::span<const ri::LabelledFeatures> train, const ri::LabelledFeatures& validate) {
   return ri::train_recogniser(train, validate);

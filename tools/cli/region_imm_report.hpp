@@ -36,7 +36,7 @@ ri::Track region_imm_report(const RegionImmRun& in, Json& json, std::ostream& ou
 // recogniser's PSO-SVM training), and the demo section, `run region-imm` and `region-study`
 // would otherwise each compile their own copy.
 ri::RunResult run_region_pipeline(const messages::SensorLog& log, ri::Estimator e, const ri::Settings& s, const ri::RunOptions& o = {});
-ri::Recogniser train_region_recogniser(const sim::DriveConfig& test);  // eval::train_recogniser_for
+ri::Recogniser train_region_recogniser(const sim::DriveConfig& test);  // ctxfuse::studies::train_recogniser_for
 ri::Recogniser train_region_recogniser(std::span<const ri::LabelledFeatures> train, const ri::LabelledFeatures& validate);
 
 }  // namespace ctxfuse::cli

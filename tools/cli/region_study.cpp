@@ -29,7 +29,7 @@
 #include "cli/seed_list.hpp"
 #include "ctxfuse/instances/region_imm.hpp"  // run() compiled once (ctxfuse::instances)
 #include "ctxfuse/eval/region_errors.hpp"
-#include "ctxfuse/eval/region_training.hpp"
+#include "ctxfuse/studies/region_training.hpp"
 #include "ctxfuse/pipelines/region_imm.hpp"
 #include "ctxfuse/sim/drive.hpp"
 #include "ctxfuse/sim/streams.hpp"

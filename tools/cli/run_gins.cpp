@@ -2,7 +2,7 @@
 // one recording folder (one RTKLIB *.pos, one imu*.csv with its .tag), with simulated outages,
 // GNSS decimation, the platform and its constraints, the installation and RTS smoothing as
 // options. Running needs no reference: scoring is apart and optional, against the RTK-fixed
-// epochs of --reference FILE (the outage protocol of ctxfuse/eval/gins_outages.hpp with
+// epochs of --reference FILE (the outage protocol of ctxfuse/studies/gins_outages.hpp with
 // --outage, and the whole run), or with --outage alone against the folder's own .pos.
 // --out writes the trajectory (the smoothed one with --smooth):
 //   gps_s,lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg,
@@ -24,7 +24,7 @@
 #include "cli/progress.hpp"
 #include "cli/run_gins_plots.hpp"
 #include "cli/run_registry.hpp"
-#include "ctxfuse/eval/gins_outages.hpp"
+#include "ctxfuse/studies/gins_outages.hpp"
 #include "ctxfuse/instances/gins_nav20.hpp"
 
 namespace ctxfuse::cli {
@@ -61,7 +61,7 @@ std::string parse_outage(const std::string& s, gins::OutageSchedule* out) {
   if (!(v[0] > 0.0)) return "outage length " + std::to_string(v[0]) + " s must be positive";
   if (!(v[1] >= v[0])) return "outage period must be at least the length (" + s + ")";
   if (!(v[2] >= 0.0)) return "outage start must be >= 0 s after the first GNSS epoch (" + s + ")";
-  if (out) *out = {v[0], v[1], v[2], eval::standard_outages().end_margin};
+  if (out) *out = {v[0], v[1], v[2], ctxfuse::studies::standard_outages().end_margin};
   return {};
 }
 
@@ -130,7 +130,7 @@ std::shared_ptr<void> add_options(CLI::App& app) {
   return o;
 }
 
-Json scores_json(const eval::OutageErrors& e) {
+Json scores_json(const ctxfuse::studies::OutageErrors& e) {
   Json j;
   j["rms_m"] = e.rms;
   j["max_m"] = e.max;
@@ -334,7 +334,7 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
   doc["static_thresholds"] = std::move(thj);
   // Scoring, apart from the run: the reference's RTK-fixed epochs (--reference, else with
   // --outage the recording's own .pos).
-  eval::GinsOutageScores sc;
+  ctxfuse::studies::GinsOutageScores sc;
   std::vector<messages::GnssFix> reference;
   if (!o.reference.empty()) {
     try {
@@ -346,7 +346,7 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
     reference = rec.fixes;
   }
   if (!res.windows.empty() && !reference.empty()) {
-    sc = eval::score_outages(reference, res);
+    sc = ctxfuse::studies::score_outages(reference, res);
     out << formatted("  outages %zu (%zu scored, %zu RTK-fixed epochs, %zu before the alignment): horizontal error RMS / max\n",
                      res.windows.size(), sc.outages_scored, sc.forward.epochs, sc.forward.unscored);
     out << formatted("    forward   %7.3f / %7.3f m\n", sc.forward.rms, sc.forward.max);
@@ -358,7 +358,7 @@ int run_gins(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::o
     doc["outages_scored"] = sc.outages_scored;
   }
   if (!o.reference.empty() && !reference.empty()) {
-    const auto whole = eval::score_whole_run(reference, res);
+    const auto whole = ctxfuse::studies::score_whole_run(reference, res);
     if (whole.forward.epochs == 0) {
       err << "ctxfuse run gins: warning: the reference " << o.reference << " has no RTK-fixed epoch inside the trajectory's span\n";
     } else {

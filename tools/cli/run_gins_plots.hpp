@@ -1,5 +1,5 @@
 // The plots of `ctxfuse run gins --plot DIR` (gnuplot through cli/plot.hpp; each PNG with its
-// .dat and .gp). The reference is the recording's RTK-fixed epochs (eval/outage_protocol.hpp),
+// .dat and .gp). The reference is the recording's RTK-fixed epochs (studies/outage_protocol.hpp),
 // the same ones the JSON's outage scores use; the pipeline never sees them.
 //   gins_trajectory   plan view, east/north [m] from the first reference epoch: the forward
 //                     (and smoothed) trajectory, the reference, the reference inside outages;
@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "cli/plot.hpp"
-#include "ctxfuse/eval/gins_outages.hpp"
+#include "ctxfuse/studies/gins_outages.hpp"
 
 namespace ctxfuse::cli {
 
@@ -45,9 +45,9 @@ inline double sigma_horizontal_at(std::span<const pipelines::gins::TrajectoryRow
 }
 
 inline void plot_gins(Plotter& plotter, std::span<const messages::GnssFix> fixes, const pipelines::gins::RunResult& res,
-                      const eval::GinsOutageScores& scores) {
+                      const ctxfuse::studies::GinsOutageScores& scores) {
   using Series = Plotter::Series;
-  const auto ref = eval::rtk_fixed_reference(fixes);
+  const auto ref = ctxfuse::studies::rtk_fixed_reference(fixes);
   if (ref.empty() || res.forward.empty()) return;
   const double t0 = fixes.front().t;
   const LocalPlane plane(ref.front().lat, ref.front().lon);
@@ -57,7 +57,7 @@ inline void plot_gins(Plotter& plotter, std::span<const messages::GnssFix> fixes
   struct Pass {
     const char* name;
     const std::vector<pipelines::gins::TrajectoryRow>* rows;
-    const eval::OutageErrors* scores;
+    const ctxfuse::studies::OutageErrors* scores;
   };
   std::vector<Pass> passes{{"forward", &res.forward, &scores.forward}};
   if (!res.smoothed.empty()) passes.push_back({"smoothed", &res.smoothed, &scores.smoothed});
@@ -79,12 +79,12 @@ inline void plot_gins(Plotter& plotter, std::span<const messages::GnssFix> fixes
 
   std::vector<Series> err, per_outage;
   for (const auto& p : passes) {
-    const auto ll = eval::lat_lon_of(*p.rows);
+    const auto ll = ctxfuse::studies::lat_lon_of(*p.rows);
     Series all{std::string(p.name) + " horizontal error", {}, true}, inside{std::string(p.name) + " error inside outages", {}, false},
         sigma{std::string(p.name) + " 1-sigma horizontal", {}, true};
     for (const auto& r : ref) {
-      // The error the outage scores aggregate (eval::horizontal_error_at).
-      const std::optional<double> err = eval::horizontal_error_at(ll, r);
+      // The error the outage scores aggregate (ctxfuse::studies::horizontal_error_at).
+      const std::optional<double> err = ctxfuse::studies::horizontal_error_at(ll, r);
       if (!err) continue;
       const double e = *err;
       all.points.emplace_back(r.t - t0, e);

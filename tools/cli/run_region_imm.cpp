@@ -12,7 +12,7 @@
 #include "cli/options.hpp"
 #include "cli/region_imm_report.hpp"
 #include "cli/run_registry.hpp"
-#include "ctxfuse/eval/region_training.hpp"
+#include "ctxfuse/studies/region_training.hpp"
 #include "ctxfuse/sim/logs.hpp"
 #include "ctxfuse/pipelines/region_imm/recogniser_io.hpp"
 
@@ -41,7 +41,7 @@ std::shared_ptr<void> add_options(CLI::App& app) {
 
 ri::LabelledFeatures labelled(const std::string& dir) {
   const sim::SimLogs logs = sim::read_sim_logs(dir);
-  return eval::labelled_features(logs.sensors, logs.truth);
+  return ctxfuse::studies::labelled_features(logs.sensors, logs.truth);
 }
 
 int run(const std::shared_ptr<void>& opts, const RunInput& in, RunOutput& out, std::ostream& err) {

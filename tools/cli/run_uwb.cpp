@@ -8,9 +8,9 @@
 // reference), or the consistency check alone. --out writes the trajectory of the variant
 // --estimator and --policy choose (time_ns,x,y,z; z is the tag's height). Scoring is a separate
 // step, done when there is a reference (--reference, else the folder's trajectory.csv): every
-// variant and baseline with the authors' protocol on --span (eval/hanyang_protocol.hpp), or the
+// variant and baseline with the authors' protocol on --span (studies/hanyang_protocol.hpp), or the
 // whole run; a reference the span does not fit is a warning, never a failed run. Parsing and
-// formatting only: the runs and scores are eval/nlos_uwb.hpp's.
+// formatting only: the runs and scores are studies/nlos_uwb.hpp's.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -29,7 +29,7 @@
 #include "cli/run_registry.hpp"
 #include "cli/uwb_plots.hpp"
 #include "ctxfuse/classify/svm_io.hpp"
-#include "ctxfuse/eval/nlos_uwb.hpp"
+#include "ctxfuse/studies/nlos_uwb.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/recording.hpp"
 
 namespace ctxfuse::cli {
@@ -100,15 +100,15 @@ std::shared_ptr<void> add_options(CLI::App& app) {
       ->check(CLI::Validator(
           [](std::string& s) {
             if (s == "a" || s == "b" || s == "auto" || s == "none") return std::string();
-            eval::HanyangSpan span;
-            return eval::parse_hanyang_span(s, span);
+            ctxfuse::studies::HanyangSpan span;
+            return ctxfuse::studies::parse_hanyang_span(s, span);
           },
           "SPAN", "span"))
       ->capture_default_str();
   return o;
 }
 
-Json identification_json(const eval::Identification& m) {
+Json identification_json(const ctxfuse::studies::Identification& m) {
   Json j;
   j["precision"] = m.precision;
   j["recall"] = m.recall;
@@ -136,10 +136,10 @@ bool write_trajectory(const std::string& path, const nu::Track& track, double z,
 }
 
 /// Each estimate's error under the protocol (NaN where not scored).
-std::vector<double> uwb_errors(std::span<const eval::TimedPoint2> est, std::span<const io::HanyangReferencePose> ref,
-                               const eval::ScoringProtocol& p) {
+std::vector<double> uwb_errors(std::span<const ctxfuse::studies::TimedPoint2> est, std::span<const io::HanyangReferencePose> ref,
+                               const ctxfuse::studies::ScoringProtocol& p) {
   std::vector<double> out;
-  eval::score_2d(est, ref, p, &out);
+  ctxfuse::studies::score_2d(est, ref, p, &out);
   return out;
 }
 
@@ -150,16 +150,16 @@ std::vector<double> scored(std::vector<double> errors) {
 
 struct UwbScoring {
   std::vector<io::HanyangReferencePose> reference;
-  eval::ScoringProtocol protocol;
+  ctxfuse::studies::ScoringProtocol protocol;
 };
 
 // --plot: the chosen variant, with the reference when there is one; beside its CDF the paper's
 // pipeline, the gate alone, LS, and the authors' ESKF (their ESKF.csv) when the case has it.
-void plot_case(const std::string& dir, const std::vector<eval::NlosUwbVariant>& variants, const std::string& chosen,
+void plot_case(const std::string& dir, const std::vector<ctxfuse::studies::NlosUwbVariant>& variants, const std::string& chosen,
                const std::filesystem::path& case_dir, const UwbScoring* scoring, std::ostream& out, std::ostream& err) {
   Plotter plotter(dir, err);
   if (plotter.available()) {
-    auto variant = [&](std::string_view name) -> const eval::NlosUwbVariant* {
+    auto variant = [&](std::string_view name) -> const ctxfuse::studies::NlosUwbVariant* {
       for (const auto& v : variants)
         if (v.name == name) return &v;
       return nullptr;
@@ -180,7 +180,7 @@ void plot_case(const std::string& dir, const std::vector<eval::NlosUwbVariant>& 
         p.anchors.push_back(rec.range.anchor_position.head<2>());
       }
     std::vector<double> errors(track.estimates.size(), std::nan(""));
-    if (scoring) errors = uwb_errors(eval::timed_points(track), scoring->reference, scoring->protocol);
+    if (scoring) errors = uwb_errors(ctxfuse::studies::timed_points(track), scoring->reference, scoring->protocol);
     for (std::size_t i = 0; i < track.estimates.size(); ++i) {
       const auto& e = track.estimates[i];
       p.estimates.push_back({e.t, e.position, e.epoch_attached, errors[i]});
@@ -190,9 +190,9 @@ void plot_case(const std::string& dir, const std::vector<eval::NlosUwbVariant>& 
     if (scoring) {
       for (const char* name : {"ekf_gate_paper_rule", "ekf_gate", "least_squares"})
         if (const auto* v = variant(name); v && name != chosen)
-          p.other_errors.emplace_back(name, scored(uwb_errors(eval::timed_points(v->track), scoring->reference, scoring->protocol)));
+          p.other_errors.emplace_back(name, scored(uwb_errors(ctxfuse::studies::timed_points(v->track), scoring->reference, scoring->protocol)));
       if (std::filesystem::exists(case_dir / "ESKF.csv"))
-        p.other_errors.emplace_back("authors' ESKF", scored(uwb_errors(eval::read_hanyang_estimates(case_dir / "ESKF.csv"),
+        p.other_errors.emplace_back("authors' ESKF", scored(uwb_errors(ctxfuse::studies::read_hanyang_estimates(case_dir / "ESKF.csv"),
                                                                        scoring->reference, scoring->protocol)));
     }
     plot_uwb(plotter, p);
@@ -260,7 +260,7 @@ int run_uwb(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::os
   std::optional<nu::NlosSvm> svm;
   std::string classifier_kind = "consistency-only", classifier_note;
   std::vector<std::filesystem::path> train(o.train.begin(), o.train.end());
-  std::vector<eval::NlosUwbVariant> variants;
+  std::vector<ctxfuse::studies::NlosUwbVariant> variants;
   const std::filesystem::path ref_path =
       !o.reference.empty() ? std::filesystem::path(o.reference)
                            : (std::filesystem::exists(in.data_dir / "trajectory.csv") ? in.data_dir / "trajectory.csv" : std::filesystem::path());
@@ -283,9 +283,9 @@ int run_uwb(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::os
       classifier_kind = "svm-file";
       classifier_note = "loaded from " + o.nlos_model;
     } else {
-      if (train.empty()) train = eval::other_hanyang_cases(in.data_dir);
+      if (train.empty()) train = ctxfuse::studies::other_hanyang_cases(in.data_dir);
       if (!train.empty()) {
-        svm = eval::train_svm_on_cases(train, settings);
+        svm = ctxfuse::studies::train_svm_on_cases(train, settings);
         classifier_kind = "svm-siblings";
         classifier_note = "trained on " + std::to_string(train.size()) + " labelled cases";
       } else {
@@ -297,9 +297,9 @@ int run_uwb(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::os
     const nu::NlosClassifier classifier(settings, svm);
     if (ref_path.empty()) {
       const std::string_view names[] = {chosen};
-      variants = eval::run_nlos_uwb_variants(ranges, classifier, settings, names);
+      variants = ctxfuse::studies::run_nlos_uwb_variants(ranges, classifier, settings, names);
     } else {
-      variants = eval::run_nlos_uwb_variants(ranges, classifier, settings);
+      variants = ctxfuse::studies::run_nlos_uwb_variants(ranges, classifier, settings);
     }
   } catch (const std::exception& e) {
     err << "ctxfuse run uwb: " << e.what() << '\n';
@@ -349,8 +349,8 @@ int run_uwb(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::os
     try {
       UwbScoring sc;
       sc.reference = io::read_hanyang_reference_file(ref_path);
-      sc.protocol = eval::choose_protocol(o.span, sc.reference);
-      eval::score_nlos_uwb_variants(variants, sc.reference, sc.protocol);
+      sc.protocol = ctxfuse::studies::choose_protocol(o.span, sc.reference);
+      ctxfuse::studies::score_nlos_uwb_variants(variants, sc.reference, sc.protocol);
       scoring = std::move(sc);
     } catch (const std::exception& e) {
       err << "ctxfuse run uwb: warning: not scored: " << e.what() << '\n';
@@ -361,7 +361,7 @@ int run_uwb(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::os
     const auto& p = scoring->protocol;
     if (!p.warning.empty()) err << "ctxfuse run uwb: warning: " << p.warning << '\n';
     out << "2-D RMSE against " << ref_path.string() << ", "
-        << (p.span ? "authors' protocol, span " + p.name + " (" + eval::describe(p.span->start) + " to " + eval::describe(p.span->end) + ")"
+        << (p.span ? "authors' protocol, span " + p.name + " (" + ctxfuse::studies::describe(p.span->start) + " to " + ctxfuse::studies::describe(p.span->end) + ")"
                    : std::string("whole run"))
         << " (m):\n";
     Json rmse, epochs;
@@ -374,7 +374,7 @@ int run_uwb(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::os
     std::map<std::string, double> authors_rmsd;
     if (std::filesystem::exists(in.data_dir / "RMSD_results.txt")) {
       try {
-        authors_rmsd = eval::read_hanyang_rmsd(in.data_dir / "RMSD_results.txt");
+        authors_rmsd = ctxfuse::studies::read_hanyang_rmsd(in.data_dir / "RMSD_results.txt");
       } catch (const std::exception& e) {
         err << "ctxfuse run uwb: warning: " << e.what() << '\n';
       }
@@ -385,7 +385,7 @@ int run_uwb(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::os
         out << formatted("  authors %-28s %7.3f\n", who, it->second);
         authors[who] = it->second;
       }
-    const auto id = eval::identification(variants.front().track, scoring->reference, settings);
+    const auto id = ctxfuse::studies::identification(variants.front().track, scoring->reference, settings);
     out << "NLOS identification against residual labels (" << variants.front().name << " run): precision / recall / accuracy\n";
     for (const auto& [name, m] : {std::pair{"svm", id.svm}, std::pair{"consistency", id.consistency}, std::pair{"ds", id.ds}})
       out << formatted("  %-12s %.3f / %.3f / %.3f  (%zu ranges, %zu NLOS)\n", name, m.precision, m.recall, m.accuracy, m.scored,
@@ -393,7 +393,7 @@ int run_uwb(const std::shared_ptr<void>& opts, const FolderRunInput& in, std::os
     Json& s = doc["scoring"];
     s["reference"] = ref_path.string();
     s["protocol"] = p.name;
-    if (p.span) s["span"] = eval::describe(p.span->start) + "/" + eval::describe(p.span->end);
+    if (p.span) s["span"] = ctxfuse::studies::describe(p.span->start) + "/" + ctxfuse::studies::describe(p.span->end);
     s["warning"] = p.warning;
     s["t_begin"] = chosen_it->rmse.t_begin;
     s["t_end"] = chosen_it->rmse.t_end;

@@ -2,7 +2,7 @@
 // [--json FILE]`: scores any trajectory CSV against a Hanyang reference, as trajectory
 // evaluation tools do. The estimate is ours (`run uwb --out`: time_ns,x,y,z) or another tool's
 // with a `timestamp` [ns] column (the dataset authors' LS.csv, ESKF.csv); the protocol is the
-// authors' on a span (eval/hanyang_protocol.hpp) or the plain whole-run 2-D RMSE. A span the
+// authors' on a span (studies/hanyang_protocol.hpp) or the plain whole-run 2-D RMSE. A span the
 // reference does not fit is a warning and the whole run is scored. Parsing and formatting only.
 #include <algorithm>
 #include <cmath>
@@ -14,7 +14,7 @@
 #include "cli/json.hpp"
 #include "cli/options.hpp"
 #include "cli/registry.hpp"
-#include "ctxfuse/eval/hanyang_protocol.hpp"
+#include "ctxfuse/studies/hanyang_protocol.hpp"
 
 namespace ctxfuse::cli {
 namespace {
@@ -35,22 +35,22 @@ int score_command(Args args, std::ostream& out, std::ostream& err) {
       ->check(CLI::Validator(
           [](std::string& s) {
             if (s == "a" || s == "b" || s == "auto" || s == "none") return std::string();
-            eval::HanyangSpan parsed;
-            return eval::parse_hanyang_span(s, parsed);
+            ctxfuse::studies::HanyangSpan parsed;
+            return ctxfuse::studies::parse_hanyang_span(s, parsed);
           },
           "SPAN", "span"));
   app.add_option("--json", json, "write the score as JSON");
   if (const auto rc = parse_options(app, args, out, err)) return *rc;
-  std::vector<eval::TimedPoint2> est;
+  std::vector<ctxfuse::studies::TimedPoint2> est;
   std::vector<io::HanyangReferencePose> ref;
-  eval::ScoringProtocol p;
-  eval::ProtocolRmse r;
+  ctxfuse::studies::ScoringProtocol p;
+  ctxfuse::studies::ProtocolRmse r;
   std::vector<double> errors;
   try {
-    est = eval::read_hanyang_estimates(estimate);
+    est = ctxfuse::studies::read_hanyang_estimates(estimate);
     ref = io::read_hanyang_reference_file(reference);
-    p = eval::choose_protocol(span, ref);
-    r = eval::score_2d(est, ref, p, &errors);
+    p = ctxfuse::studies::choose_protocol(span, ref);
+    r = ctxfuse::studies::score_2d(est, ref, p, &errors);
   } catch (const std::exception& e) {
     err << "ctxfuse score: " << e.what() << '\n';
     return 1;
@@ -61,7 +61,7 @@ int score_command(Args args, std::ostream& out, std::ostream& err) {
   double mean = 0.0;
   for (double e : errors) mean += e / static_cast<double>(errors.size());
   out << "score of " << estimate << " against " << reference << ": "
-      << (p.span ? "authors' protocol, span " + p.name + " (" + eval::describe(p.span->start) + " to " + eval::describe(p.span->end) + ")"
+      << (p.span ? "authors' protocol, span " + p.name + " (" + ctxfuse::studies::describe(p.span->start) + " to " + ctxfuse::studies::describe(p.span->end) + ")"
                  : std::string("whole run"))
       << '\n'
       << formatted("  2-D RMSE %.4f m, mean %.4f m, max %.4f m over %zu of %zu estimates (%.3f s to %.3f s of the reference)\n",
@@ -72,7 +72,7 @@ int score_command(Args args, std::ostream& out, std::ostream& err) {
     doc["estimate"] = estimate;
     doc["reference"] = reference;
     doc["protocol"] = p.name;
-    if (p.span) doc["span"] = eval::describe(p.span->start) + "/" + eval::describe(p.span->end);
+    if (p.span) doc["span"] = ctxfuse::studies::describe(p.span->start) + "/" + ctxfuse::studies::describe(p.span->end);
     doc["warning"] = p.warning;
     doc["rmse_2d_m"] = r.rmse_2d;
     doc["mean_2d_m"] = errors.empty() ? std::nan("") : mean;

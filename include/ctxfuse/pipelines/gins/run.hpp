@@ -2,7 +2,7 @@
 // with its .tag, optionally one mag*.csv), the forward pass over io::replay, optionally the
 // RTS smoother over its step records, and the trajectory rows. The GNSS fixes (and the
 // magnetometer, when asked for) are the filter's only aiding; the same .pos is the RTK
-// reference of the evaluation (eval/outage_protocol.hpp), which this file never sees.
+// reference of the evaluation (studies/outage_protocol.hpp), which this file never sees.
 #pragma once
 
 #include <filesystem>

@@ -41,7 +41,7 @@ template <int MaxAnchors>
 using CalibratedLayout = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>, StateBlock<"b", MaxAnchors>>;
 
 /// MaxAnchors bias slots, taken by anchor id in the order the anchors first range; an anchor
-/// beyond them is used without a bias state. The pipeline's runs (eval/nlos_uwb.hpp) take 16,
+/// beyond them is used without a bias state. The pipeline's runs (studies/nlos_uwb.hpp) take 16,
 /// its anchor limit (NlosClassifier::kMaxAnchors): a slot no anchor takes keeps its prior and no
 /// correlation, so it changes no estimate (the Hanyang figures are the same to the last digit
 /// with 8 and 16). Settings::lag_records sizes the fixed-lag window in records (one per

@@ -3,7 +3,7 @@
 // q1 q2), NLOS when R > 0.8. Without an IMU the vehicle speed v_i and the travelled distance
 // d_d come from the estimator's own velocity (the caller passes its speed).
 //
-// The SVM is trained on labelled ranges of other recordings (eval/nlos_uwb.hpp builds them;
+// The SVM is trained on labelled ranges of other recordings (studies/nlos_uwb.hpp builds them;
 // labels from residuals against those recordings' references), never on the run it scores.
 // Without a model p1 is absent and R is p2 alone (D-S with one source).
 //
@@ -104,7 +104,7 @@ class NlosClassifier {
   int used_ = 0;
 };
 
-/// Labelled SVM rows (from eval/nlos_uwb.hpp: runs on other recordings, residual labels).
+/// Labelled SVM rows (from studies/nlos_uwb.hpp: runs on other recordings, residual labels).
 struct LabelledSvmRows {
   std::vector<SvmInput> inputs;
   std::vector<int> labels;  // kNlosLabel / kLosLabel

@@ -1,9 +1,9 @@
 // The scene paper's classifier (digest section B) on simulated drives, for the GNSS/INS study
-// (eval/gins_sim_study.hpp): the eight features per receiver epoch (features/gnss_scene.hpp),
+// (studies/gins_sim_study.hpp): the eight features per receiver epoch (features/gnss_scene.hpp),
 // a linear one-vs-one SVM with Platt probabilities and pairwise coupling (classify/svm_train.hpp,
 // C = 1, standardised inputs: the paper's choice, nothing searched), trained on drives of other
 // seeds with their true scene labels (sim::Scene: open, obstructed, indoor) -- the seeds of
-// eval/region_training.hpp -- and applied to the test drive's epochs, whose labels it never
+// studies/region_training.hpp -- and applied to the test drive's epochs, whose labels it never
 // sees. Needs libsvm at link time (training), like the region recogniser.
 #pragma once
 
@@ -15,12 +15,12 @@
 
 #include "ctxfuse/classify/svm.hpp"
 #include "ctxfuse/classify/svm_train.hpp"
-#include "ctxfuse/eval/region_training.hpp"
+#include "ctxfuse/studies/region_training.hpp"
 #include "ctxfuse/features/gnss_scene.hpp"
 #include "ctxfuse/policies/scene_noise.hpp"
 #include "ctxfuse/sim/drive.hpp"
 
-namespace ctxfuse::eval {
+namespace ctxfuse::studies {
 
 using SceneSvm = classify::SvmModel<features::kGnssSceneFeatureCount, 3>;
 
@@ -97,4 +97,4 @@ inline std::vector<policies::SceneProbabilities> true_scene_probabilities(const 
   return out;
 }
 
-}  // namespace ctxfuse::eval
+}  // namespace ctxfuse::studies

@@ -18,7 +18,7 @@
 #include "ctxfuse/sim/drive.hpp"
 #include "ctxfuse/sim/streams.hpp"
 
-namespace ctxfuse::eval {
+namespace ctxfuse::studies {
 
 struct RegionTrainingDrives {
   static constexpr std::uint64_t train_seed_offset = 101, train_drives = 3, validate_seed_offset = 202;
@@ -28,7 +28,7 @@ struct RegionTrainingDrives {
 inline pipelines::region_imm::LabelledFeatures labelled_features(const messages::SensorLog& log, const sim::TruthLog& truth) {
   pipelines::region_imm::LabelledFeatures out;
   out.features = pipelines::region_imm::gnss_features(log.sat_epochs);
-  out.labels = region_labels(truth.truth, out.features.t);
+  out.labels = eval::region_labels(truth.truth, out.features.t);
   return out;
 }
 
@@ -52,4 +52,4 @@ inline pipelines::region_imm::Recogniser train_recogniser_for(const sim::DriveCo
                                                  labelled_features(sim::simulate_drive(validate)), opts);
 }
 
-}  // namespace ctxfuse::eval
+}  // namespace ctxfuse::studies

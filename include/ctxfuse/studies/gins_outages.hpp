@@ -1,4 +1,4 @@
-// Scoring a GNSS/INS run (pipelines/gins) with the outage protocol (eval/outage_protocol.hpp):
+// Scoring a GNSS/INS run (pipelines/gins) with the outage protocol (studies/outage_protocol.hpp):
 // the reference is the recording's own RTK-fixed epochs, read here and never by the pipeline.
 // Also the installation of the gnss-imu-drive recording, as its data README gives it.
 #pragma once
@@ -7,10 +7,10 @@
 #include <span>
 #include <vector>
 
-#include "ctxfuse/eval/outage_protocol.hpp"
+#include "ctxfuse/studies/outage_protocol.hpp"
 #include "ctxfuse/pipelines/gins/run.hpp"
 
-namespace ctxfuse::eval {
+namespace ctxfuse::studies {
 
 /// gnss-imu-drive (data README, upstream configuration): IMU axes -> body by roll 180, pitch
 /// -6.79, yaw 185.35 deg; IMU at (0, 0, -0.65) m and GNSS antenna at (0, -0.05, -0.65) m from
@@ -59,4 +59,4 @@ inline GinsOutageScores score_whole_run(std::span<const messages::GnssFix> refer
   return s;
 }
 
-}  // namespace ctxfuse::eval
+}  // namespace ctxfuse::studies

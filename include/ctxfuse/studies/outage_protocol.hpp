@@ -18,7 +18,7 @@
 #include "ctxfuse/models/earth.hpp"
 #include "ctxfuse/pipelines/gins/gnss_schedule.hpp"
 
-namespace ctxfuse::eval {
+namespace ctxfuse::studies {
 
 /// The protocol's schedule and rate.
 inline pipelines::gins::OutageSchedule standard_outages() { return {15.0, 45.0, 40.0, 30.0}; }
@@ -107,4 +107,4 @@ inline OutageErrors outage_errors(std::span<const TimedLatLon> traj, std::span<c
   return r;
 }
 
-}  // namespace ctxfuse::eval
+}  // namespace ctxfuse::studies

@@ -37,7 +37,7 @@
 #include <vector>
 
 #include "ctxfuse/classify/confusion_matrix.hpp"
-#include "ctxfuse/eval/nlos_uwb.hpp"
+#include "ctxfuse/studies/nlos_uwb.hpp"
 #include "ctxfuse/eval/position_error.hpp"
 #include "ctxfuse/eval/trajectory.hpp"
 #include "ctxfuse/models/ins.hpp"
@@ -49,7 +49,7 @@
 #include "ctxfuse/sim/scenarios.hpp"
 #include "ctxfuse/sim/streams.hpp"
 
-namespace ctxfuse::eval {
+namespace ctxfuse::studies {
 
 /// The paper's protocol as a simulator configuration (see the top of this file).
 struct NlosSimProtocol {
@@ -94,8 +94,8 @@ inline LabelledRanges labelled_ranges(const sim::Drive& d) {
 
 struct NlosSimVariant {
   std::string name;
-  std::vector<TimedPosition> estimates;  // within the scored span
-  PositionErrorStats errors;
+  std::vector<eval::TimedPosition> estimates;  // within the scored span
+  eval::PositionErrorStats errors;
   std::size_t epochs_left_out = 0;      // epochs whose ranges all stayed out (estimators with ranges)
   std::size_t restarts = 0, ranges_gated = 0;  // lock-out restarts from a fix; ranges the gate refused
 };
@@ -179,8 +179,8 @@ inline void score_identification(const pipelines::nlos_uwb::Track& track, const 
 
 /// The strapdown mechanisation of the drive's IMU from the true state at t0 (flat site, ENU,
 /// biases unknown: zero), one position per `times` entry in [t0, ...).
-inline std::vector<TimedPosition> imu_only_track(const sim::Drive& d, double t0, std::span<const double> times) {
-  std::vector<TimedPosition> out;
+inline std::vector<eval::TimedPosition> imu_only_track(const sim::Drive& d, double t0, std::span<const double> times) {
+  std::vector<eval::TimedPosition> out;
   if (d.imu.empty() || d.truth.size() != d.imu.size()) return out;
   std::size_t k = 0;
   while (k + 1 < d.imu.size() && d.imu[k + 1].t <= t0) ++k;
@@ -248,17 +248,17 @@ inline NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::ui
   rep.span_start = ls.estimates.front().t;
   rep.span_end = ls.estimates.back().t;
   auto in_span = [&](const nu::Track& t) {
-    std::vector<TimedPosition> out;
+    std::vector<eval::TimedPosition> out;
     for (const auto& e : t.estimates)
       if (e.t >= rep.span_start && e.t <= rep.span_end) out.push_back({e.t, Eigen::Vector3d(e.position.x(), e.position.y(), 0.0)});
     return out;
   };
-  auto add = [&](std::string_view name, std::vector<TimedPosition> est, std::size_t left_out) {
-    const AlignedErrors a = align_to_truth(est, d.truth);
+  auto add = [&](std::string_view name, std::vector<eval::TimedPosition> est, std::size_t left_out) {
+    const eval::AlignedErrors a = eval::align_to_truth(est, d.truth);
     std::vector<Eigen::Vector3d> e2;
     e2.reserve(a.errors.size());
     for (const auto& e : a.errors) e2.emplace_back(e.x(), e.y(), 0.0);  // 2-D: the tag height is known
-    rep.variants.push_back({std::string(name), std::move(est), position_error_stats(e2), left_out, 0, 0});
+    rep.variants.push_back({std::string(name), std::move(est), eval::position_error_stats(e2), left_out, 0, 0});
   };
   auto add_run = [&](std::string_view name, const nu::Track& t) {
     add(name, in_span(t), t.epochs_left_out);
@@ -295,4 +295,4 @@ inline NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::ui
   return rep;
 }
 
-}  // namespace ctxfuse::eval
+}  // namespace ctxfuse::studies

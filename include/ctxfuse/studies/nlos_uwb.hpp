@@ -1,5 +1,5 @@
 // Scoring of the NLOS-robust UWB pipeline on the Hanyang recordings (truth lives here only;
-// the authors' RMSE protocol is in eval/hanyang_protocol.hpp):
+// the authors' RMSE protocol is in studies/hanyang_protocol.hpp):
 // - residual labels of the ranges: NLOS when a range exceeds the distance from the reference
 //   (tag at reference + tag height) to the anchor by more than label_sigma_multiple sigmas;
 // - precision / recall / accuracy of the SVM (p1 > 0.5), consistency (p2 > 0.5) and D-S
@@ -22,13 +22,13 @@
 #include <vector>
 
 #include "ctxfuse/classify/confusion_matrix.hpp"
-#include "ctxfuse/eval/hanyang_protocol.hpp"
+#include "ctxfuse/studies/hanyang_protocol.hpp"
 #include "ctxfuse/io/hanyang_uwb.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/calibrated_ekf.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/run.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/smoother.hpp"
 
-namespace ctxfuse::eval {
+namespace ctxfuse::studies {
 
 inline std::vector<TimedPoint2> timed_points(const pipelines::nlos_uwb::Track& track) {
   std::vector<TimedPoint2> out;
@@ -140,9 +140,9 @@ inline pipelines::nlos_uwb::NlosSvm train_svm_on_cases(std::span<const std::file
   return pipelines::nlos_uwb::train_nlos_svm(rows, s);
 }
 
-}  // namespace ctxfuse::eval
+}  // namespace ctxfuse::studies
 
-namespace ctxfuse::eval {
+namespace ctxfuse::studies {
 
 /// One estimator/policy combination run on a case and scored with the authors' protocol.
 struct NlosUwbVariant {
@@ -275,4 +275,4 @@ inline NlosUwbCaseReport evaluate_nlos_uwb_case(const std::filesystem::path& cas
   return rep;
 }
 
-}  // namespace ctxfuse::eval
+}  // namespace ctxfuse::studies

@@ -1,7 +1,7 @@
 // The papers' GNSS/INS schemes on the simulated drive (issue 17 "Simulation"; digest sections
 // B and D): (a) GNSS/INS, (b) + RTS, (c) + vehicle constraints, (d) + both, each with a fixed
 // GNSS R and with the scene-adaptive R of eq. 20-21 (policies/scene_noise.hpp) fed by the
-// trained scene classifier on the simulated satellite epochs (eval/gins_sim_scene.hpp), and
+// trained scene classifier on the simulated satellite epochs (studies/gins_sim_scene.hpp), and
 // for reference with the true scenes (an oracle, not a result).
 //
 // The filter is assembled from the geodetic models directly: InsNavModel<SimplifiedStrapdown>
@@ -37,7 +37,7 @@
 #include <string>
 #include <vector>
 
-#include "ctxfuse/eval/gins_sim_scene.hpp"
+#include "ctxfuse/studies/gins_sim_scene.hpp"
 #include "ctxfuse/filters/eskf.hpp"
 #include "ctxfuse/filters/rts.hpp"
 #include "ctxfuse/models/ins_augment.hpp"
@@ -45,7 +45,7 @@
 #include "ctxfuse/models/ins_updates.hpp"
 #include "ctxfuse/policies/gating.hpp"
 
-namespace ctxfuse::eval {
+namespace ctxfuse::studies {
 
 struct GinsSimScheme {
   std::string name;
@@ -359,4 +359,4 @@ inline GinsSimStudy gins_sim_study(const sim::DriveConfig& cfg, const GinsSimSet
   return gins_sim_study(sim::simulate_drive(cfg), s);
 }
 
-}  // namespace ctxfuse::eval
+}  // namespace ctxfuse::studies

@@ -29,7 +29,7 @@
 #include "ctxfuse/io/hanyang_uwb.hpp"
 #include "ctxfuse/io/text.hpp"
 
-namespace ctxfuse::eval {
+namespace ctxfuse::studies {
 
 /// One bound of a gate on one axis: none, or the coordinate compared with `value`.
 struct AxisBound {
@@ -345,4 +345,4 @@ inline std::map<std::string, double> read_hanyang_rmsd(const std::filesystem::pa
   return out;
 }
 
-}  // namespace ctxfuse::eval
+}  // namespace ctxfuse::studies
