@@ -60,19 +60,6 @@ inline std::ostream& operator<<(std::ostream& os, const JacobianReport& r) {
   return os << ", max scaled error " << r.max_error;
 }
 
-/// d f(x) / d x at x for f: R^N -> R^M, central differences with step h per coordinate.
-template <int M, int N, class F>
-Matrix<M, N> central_jacobian(F&& f, const Vector<N>& x, double h = 1e-6) {
-  Matrix<M, N> J;
-  for (int i = 0; i < N; ++i) {
-    Vector<N> xp = x, xm = x;
-    xp(i) += h;
-    xm(i) -= h;
-    J.col(i) = (f(xp) - f(xm)) / (2.0 * h);
-  }
-  return J;
-}
-
 namespace detail {
 
 template <int N>
@@ -260,6 +247,14 @@ JacobianReport check_reset(const Model& m, const typename Model::State& x, const
     if (!p) return p;
   }
   return r;
+}
+
+/// d f(x) / d x at x for f: R^N -> R^M, central differences with step h per coordinate.
+template <int M, int N, class F>
+Matrix<M, N> central_jacobian(F&& f, const Vector<N>& x, double h = 1e-6) {
+  JacobianOptions o;
+  o.step = h;
+  return detail::central_jacobian_at<M, N>(std::forward<F>(f), x, o);
 }
 
 namespace detail {
