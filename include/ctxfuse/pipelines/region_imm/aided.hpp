@@ -77,11 +77,6 @@ struct UpdateEvent {
   std::array<bool, kMaxTakers> gated{};
 };
 
-/// Watches nothing (the default).
-struct NoObserver {
-  void operator()(const UpdateEvent&) const {}
-};
-
 /// A non-owning reference to what watches the updates (anything callable with a const
 /// UpdateEvent&, given by pointer), or to nothing. A run-time value, not a template parameter:
 /// the estimators are compiled once whatever watches them (instances/region_imm.hpp), for one
