@@ -66,15 +66,15 @@ expect_error() {  # expect_error <status> <message fragment> <command...>
   grep -qF -- "$fragment" err.out || fail "'$*' did not say '$fragment': $(cat err.out)"
 }
 printf 'label,snr,count\n1,40,20\n2,abc,12\n' > bad_number.csv
-expect_error 1 "bad_number.csv:3: column 'snr' (2): expected a number, got 'abc'" "$cli" classify test --model ours.model --data bad_number.csv
+expect_error 1 "bad_number.csv:3:2: column 'snr': 'abc' is not a number" "$cli" classify test --model ours.model --data bad_number.csv
 printf 'label,snr,count\n1,40\n' > short_row.csv
-expect_error 1 "short_row.csv:2: expected 3 fields, got 2" "$cli" classify test --model ours.model --data short_row.csv
+expect_error 1 "short_row.csv:2: 2 fields, expected 3 (as in the header)" "$cli" classify test --model ours.model --data short_row.csv
 printf 'snr,count\n40,20\n' > no_label.csv
 expect_error 1 "no_label.csv:1: header has no 'label' column" "$cli" classify train --data no_label.csv --model x.model
 printf 'label,snr,count\n1.5,40,20\n' > frac_label.csv
-expect_error 1 "frac_label.csv:2: column 'label' (1): label must be an integer" "$cli" classify test --model ours.model --data frac_label.csv
+expect_error 1 "frac_label.csv:2:1: column 'label': '1.5' is not a whole number" "$cli" classify test --model ours.model --data frac_label.csv
 printf 'label,snr,count\n1,nan,20\n' > nan.csv
-expect_error 1 "nan.csv:2: column 'snr' (2): value is NaN or Inf" "$cli" classify test --model ours.model --data nan.csv
+expect_error 1 "nan.csv:2:2: column 'snr': 'nan' is not finite" "$cli" classify test --model ours.model --data nan.csv
 : > empty.csv
 expect_error 1 "empty.csv: file is empty" "$cli" classify train --data empty.csv --model x.model
 printf 'label,a,b,c\n1,1,2,3\n' > three.csv
@@ -116,7 +116,7 @@ awk -F, 'BEGIN { OFS = "," } NR == 1 { print "time_s,note,count,cls,snr"; next }
 grep -q 'features (snr,count)' cols.out || fail "train did not use --features snr,count in order: $(cat cols.out)"
 "$cli" classify train --data train.csv --model plain.model > /dev/null 2>&1
 cmp -s <(tail -n +2 cols.model) <(tail -n +2 plain.model) || fail "--label/--features model differs from the same columns in label,snr,count order"
-expect_error 1 "cols.csv:2: column 'note' (2): expected a number, got 'x2'" "$cli" classify train --data cols.csv --label cls --ignore time_s --model x.model
+expect_error 1 "cols.csv:2:2: column 'note': 'x2' is not a number" "$cli" classify train --data cols.csv --label cls --ignore time_s --model x.model
 awk -F, 'NR == 1 || $1 != 1' train.csv | awk -F, 'BEGIN { OFS = "," } NR == 1 { print; next } { $1 = ($1 == 2 ? 9 : 4); print }' > relabel.csv
 "$cli" classify train --data relabel.csv --model relabel.model > /dev/null 2>&1 || fail "train on labels 9/4 failed"
 "$cli" classify test --data relabel.csv --model relabel.model > relabel.out 2>&1
@@ -168,6 +168,79 @@ paste -d, <(tail -n +2 dw.csv) <(tail -n +2 dw_feat.csv) | awk -F, '
     for (k = 1; k <= 5; ++k) { d = e[k] - $(11 + k); if (d < 0) d = -d; if (d > 1e-6) bad++ } }
   END { exit bad > 0 }' || fail "dw1000 features differ from the manual's formulas: $(cat dw_feat.csv)"
 expect_error 2 "give --data CSV or --static DIR" "$cli" features dw1000 --out x.csv
+
+# 9. The CSV readers of features gnss / dw1000 and context joint (io/text.hpp): CRLF, blank
+# lines and a leading '+' change nothing; bad input names file, line and column.
+same_as() {  # same_as <reference> <output> <command...>: succeeds and writes what the reference holds
+  local reference=$1 output=$2
+  shift 2
+  "$@" > cmd.out 2>&1 || fail "'$*' exited $?: $(cat cmd.out)"
+  cmp -s "$reference" "$output" || fail "'$*' wrote other output than $reference"
+}
+cat > r_sats.csv <<'CSV'
+time_s,sat_id,elevation_deg,azimuth_deg,cn0_dbhz,pdop
+1,G01,20,10,40,2.5
+1,G07,40,100,44,2.5
+1,E11,60,300,36,
+1,R05,-91,,48,
+CSV
+"$cli" features gnss --sats r_sats.csv --out r_feat.csv 2> /dev/null || fail "features gnss on r_sats.csv"
+sed 's/$/\r/' r_sats.csv > r_crlf.csv
+same_as r_feat.csv r_out.csv "$cli" features gnss --sats r_crlf.csv --out r_out.csv
+awk 'NR == 3 { print "" } { print }' r_sats.csv > r_blank.csv
+same_as r_feat.csv r_out.csv "$cli" features gnss --sats r_blank.csv --out r_out.csv
+sed 's/,40,/,+40,/' r_sats.csv > r_plus.csv
+same_as r_feat.csv r_out.csv "$cli" features gnss --sats r_plus.csv --out r_out.csv
+sed 's/^1,G07,40,100/1,G07,1e300,nan/' r_sats.csv > r_nogeo.csv
+"$cli" features gnss --sats r_nogeo.csv --out r_out.csv 2> cmd.out || fail "features gnss on r_nogeo.csv: $(cat cmd.out)"
+grep -q '2 tracked satellite rows without geometry' cmd.out || fail "1e300 / nan geometry not counted as unknown: $(cat cmd.out)"
+printf 'time_s,label\n1,2.0\n' > r_labels.csv
+"$cli" features gnss --sats r_sats.csv --labels r_labels.csv --out r_out.csv 2> cmd.out || fail "label 2.0 refused: $(cat cmd.out)"
+awk -F, 'NR == 2 && $2 != 2 { exit 1 }' r_out.csv || fail "label 2.0 not read as 2: $(cat r_out.csv)"
+printf 'label,range_m,fp_amp1,fp_amp2,fp_amp3,cir_power,rxpacc,std_noise,prf_mhz,other\n1,10.5,14305,15276,14270,6491,230,52,64,x\n' > r_dw.csv
+"$cli" features dw1000 --data r_dw.csv --out r_dw_feat.csv > /dev/null 2>&1 || fail "features dw1000 on r_dw.csv"
+sed 's/$/\r/' r_dw.csv > r_dw_crlf.csv
+same_as r_dw_feat.csv r_out.csv "$cli" features dw1000 --data r_dw_crlf.csv --out r_out.csv
+awk 'BEGIN { srand(3); print "label,snr,count"  # rows in time order, regions 0, 1, 2 in turn
+  for (i = 0; i < 300; ++i) { c = int(i / 20) % 3; printf "%d,%.3f,%.3f\n", c, 40 - 9 * c + 4 * rand(), 20 - 7 * c + 4 * rand() } }' > r_joint.csv
+"$cli" context joint --train r_joint.csv --test r_joint.csv > r_joint.out 2>&1 || fail "context joint: $(cat r_joint.out)"
+sed 's/$/\r/' r_joint.csv > r_joint_crlf.csv
+same_as r_joint.out cmd.out "$cli" context joint --train r_joint.csv --test r_joint_crlf.csv
+expect_error 1 "absent.csv: cannot open file" "$cli" features gnss --sats absent.csv
+# Each case: the command, the file it reads as bad.csv, the sed edit that makes it bad, the message.
+while IFS='|' read -r command source edit fragment <&3; do
+  sed "$edit" "$source" > bad.csv
+  case $command in
+    gnss) expect_error 1 "$fragment" "$cli" features gnss --sats bad.csv ;;
+    labels) expect_error 1 "$fragment" "$cli" features gnss --sats r_sats.csv --labels bad.csv --out r_out.csv ;;
+    dw1000) expect_error 1 "$fragment" "$cli" features dw1000 --data bad.csv --out r_out.csv ;;
+    joint) expect_error 1 "$fragment" "$cli" context joint --train r_joint.csv --test bad.csv ;;
+  esac
+done 3<<'CASES'
+gnss|r_sats.csv|3s/,44,/,150,/|bad.csv:3:5: column 'cn0_dbhz': '150' outside [0, 100]
+gnss|r_sats.csv|3s/,44,/,abc,/|bad.csv:3:5: column 'cn0_dbhz': 'abc' is not a number
+gnss|r_sats.csv|3s/,40,/,4x,/|bad.csv:3:3: column 'elevation_deg': '4x' has characters after the number
+gnss|r_sats.csv|3s/^1,/inf,/|bad.csv:3:1: column 'time_s': 'inf' is not finite
+gnss|r_sats.csv|3s/,2.5$/,0/|bad.csv:3:6: column 'pdop': '0' is not a positive number
+gnss|r_sats.csv|3s/,2.5$/,3/|bad.csv:3:6: column 'pdop': '3' differs from the epoch's other pdop (line 2)
+gnss|r_sats.csv|3s/G07/G01/|bad.csv:3:2: column 'sat_id': 'G01' appears twice in the epoch at time_s 1 (also line 2)
+gnss|r_sats.csv|3s/,100,44,2.5$//|bad.csv:3: 3 fields, expected 6 (as in the header)
+gnss|r_sats.csv|1s/^time_s/time/|bad.csv:1: header has no column 'time_s'
+gnss|r_sats.csv|d|bad.csv: empty file (no header)
+labels|r_labels.csv|2s/2.0/1.5/|bad.csv:2:2: column 'label': '1.5' is not a whole number
+labels|r_labels.csv|1s/label/lbl/|bad.csv:1: header has no column 'label'
+dw1000|r_dw.csv|2s/^1,/1.5,/|bad.csv:2:1: column 'label': '1.5' is not a whole number
+dw1000|r_dw.csv|2s/,14305,/,abc,/|bad.csv:2:3: column 'fp_amp1': 'abc' is not a number
+dw1000|r_dw.csv|2s/,10.5,/,inf,/|bad.csv:2:2: column 'range_m': 'inf' is not finite
+dw1000|r_dw.csv|2s/,64,x$//|bad.csv:2: 8 fields, expected 10 (as in the header)
+dw1000|r_dw.csv|1s/std_noise/noise/|bad.csv:1: header has no column 'std_noise'
+joint|r_joint.csv|3s/^0,/3,/|bad.csv:3:1: column 'label': '3' is outside the allowed range [0, 2]
+joint|r_joint.csv|3s/^0,/0.5,/|bad.csv:3:1: column 'label': '0.5' is not a whole number
+joint|r_joint.csv|4s/,[0-9.]*$/,nan/|bad.csv:4:3: column 'count': 'nan' is not finite
+joint|r_joint.csv|4s/,[0-9.]*$//|bad.csv:4: 2 fields, expected 3 (as in the header)
+joint|r_joint.csv|1s/label/region/|bad.csv:1: header has no column 'label'
+joint|r_joint.csv|2,$d|bad.csv: no data rows
+CASES
 
 if [ "$failures" -ne 0 ]; then
   echo "$failures check(s) failed"

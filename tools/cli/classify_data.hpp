@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <iomanip>
 #include <map>
 #include <ostream>
@@ -23,6 +22,7 @@
 #include "cli/registry.hpp"
 #include "ctxfuse/classify/svm_folds.hpp"
 #include "ctxfuse/classify/confusion_matrix.hpp"
+#include "ctxfuse/io/text.hpp"
 
 namespace ctxfuse::cli::classify_cli {
 
@@ -60,45 +60,23 @@ struct LabelledCsv {
   std::size_t group_count = 0;
 };
 
-inline std::string_view trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t' || s.front() == '\r')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
-  return s;
-}
-
-inline std::vector<std::string_view> split_commas(std::string_view line) {
-  std::vector<std::string_view> out;
-  std::size_t start = 0;
-  while (true) {
-    const auto comma = line.find(',', start);
-    out.push_back(trim(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start)));
-    if (comma == std::string_view::npos) return out;
-    start = comma + 1;
-  }
-}
-
-/// Reads a CSV with a header line. Only the selected columns are parsed (others may hold text).
-inline LabelledCsv read_labelled_csv(const std::string& path, const ColumnSelection& sel) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open for reading");
-  std::string line;
-  int line_no = 0;
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (!trim(line).empty()) break;
-  }
-  if (trim(line).empty()) throw InputError(path + ": file is empty (expected a header line)");
-  std::vector<std::string> names;
-  for (auto name : split_commas(line)) names.emplace_back(name);
-  const auto head = path + ":" + std::to_string(line_no) + ": ";
+/// Reads a CSV with a header line (its first non-blank line). Only the selected columns are
+/// parsed (others may hold text). Throws io::ParseError naming file, line and column.
+inline LabelledCsv read_labelled_csv(io::TextFile& file, const ColumnSelection& sel) {
+  std::string_view line;
+  do {
+    if (!file.next(line)) throw io::ParseError(file.name(), 0, 0, "", "file is empty (expected a header line)");
+  } while (io::trim(line).empty());
+  const io::Header header(io::split_fields(line, io::Separator::comma));
   std::map<std::string, int> column;
-  for (std::size_t c = 0; c < names.size(); ++c) {
-    if (names[c].empty()) throw InputError(head + "column " + std::to_string(c + 1) + ": empty column name");
-    if (!column.emplace(names[c], static_cast<int>(c)).second) throw InputError(head + "column '" + names[c] + "' appears twice");
+  for (std::size_t c = 0; c < header.size(); ++c) {
+    if (header.name(c).empty()) throw io::ParseError(file.name(), file.line_number(), c + 1, "", "empty column name");
+    if (!column.emplace(header.name(c), static_cast<int>(c)).second)
+      throw io::ParseError(file.name(), file.line_number(), c + 1, header.name(c), "appears twice in the header");
   }
   const auto find = [&](const std::string& name, const char* role) {
     const auto it = column.find(name);
-    if (it == column.end()) throw InputError(head + "header has no '" + name + "' column (" + role + ")");
+    if (it == column.end()) file.fail(io::cat("header has no ", io::quote(name), " column (", role, ")"));
     return it->second;
   };
   const int label_col = find(sel.label, "--label");
@@ -114,53 +92,48 @@ inline LabelledCsv read_labelled_csv(const std::string& path, const ColumnSelect
       feature_cols.push_back(c);
     }
   } else {
-    for (std::size_t c = 0; c < names.size(); ++c) {
+    for (std::size_t c = 0; c < header.size(); ++c) {
       const int ci = static_cast<int>(c);
-      if (ci == label_col || ci == group_col || std::find(sel.ignore.begin(), sel.ignore.end(), names[c]) != sel.ignore.end())
+      if (ci == label_col || ci == group_col ||
+          std::find(sel.ignore.begin(), sel.ignore.end(), header.name(c)) != sel.ignore.end())
         continue;
       feature_cols.push_back(ci);
     }
   }
   LabelledCsv csv;
-  for (int c : feature_cols) csv.feature_names.push_back(names[static_cast<std::size_t>(c)]);
-  if (csv.feature_names.empty()) throw InputError(head + "no feature columns selected");
+  for (int c : feature_cols) csv.feature_names.push_back(header.name(static_cast<std::size_t>(c)));
+  if (csv.feature_names.empty()) file.fail("no feature columns selected");
   if (csv.feature_names.size() > static_cast<std::size_t>(kMaxCliDim))
-    throw InputError(head + std::to_string(csv.feature_names.size()) + " feature columns; the CLI supports 1 to " +
-                     std::to_string(kMaxCliDim) + " (choose with --features or --ignore)");
+    file.fail(io::cat(csv.feature_names.size(), " feature columns; the CLI supports 1 to ", kMaxCliDim,
+                      " (choose with --features or --ignore)"));
   std::map<double, int> group_index;
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (trim(line).empty()) continue;
-    const auto fields = split_commas(line);
-    if (fields.size() != names.size())
-      throw InputError(path + ":" + std::to_string(line_no) + ": expected " + std::to_string(names.size()) + " fields, got " +
-                       std::to_string(fields.size()));
-    const auto number = [&](int c) {
-      const auto f = fields[static_cast<std::size_t>(c)];
-      const auto where = path + ":" + std::to_string(line_no) + ": column '" + names[static_cast<std::size_t>(c)] + "' (" +
-                         std::to_string(c + 1) + ")";
-      double v = 0.0;
-      const auto [ptr, ec] = std::from_chars(f.data(), f.data() + f.size(), v);
-      if (f.empty() || ec != std::errc() || ptr != f.data() + f.size())
-        throw InputError(where + ": expected a number, got '" + std::string(f) + "'");
-      if (!std::isfinite(v)) throw InputError(where + ": value is NaN or Inf");
-      if (c == label_col && (v != std::floor(v) || std::fabs(v) > 1e9))
-        throw InputError(where + ": label must be an integer, got '" + std::string(f) + "'");
-      return v;
-    };
-    csv.labels.push_back(static_cast<int>(number(label_col)));
+  const auto at = [](int c) { return static_cast<std::size_t>(c); };
+  io::Fields f(file.name(), &header);
+  while (io::next_fields(file, f, io::Separator::comma)) {
+    f.expect_count(header.size());
+    csv.labels.push_back(f.whole<int>(at(label_col), -1'000'000'000, 1'000'000'000));
     if (group_col >= 0) {
-      const auto [it, added] = group_index.emplace(number(group_col), static_cast<int>(group_index.size()));
+      const auto [it, added] = group_index.emplace(f.real(at(group_col), io::kAnyFinite), static_cast<int>(group_index.size()));
       csv.groups.push_back(it->second);
     }
     std::vector<double> row;
     row.reserve(feature_cols.size());
-    for (int c : feature_cols) row.push_back(number(c));
+    for (int c : feature_cols) row.push_back(f.real(at(c), io::kAnyFinite));
     csv.rows.push_back(std::move(row));
   }
-  if (csv.rows.empty()) throw InputError(path + ": no data rows after the header");
+  if (csv.rows.empty()) throw io::ParseError(file.name(), 0, 0, "", "no data rows after the header");
   csv.group_count = group_index.size();
   return csv;
+}
+
+/// The same from a path; problems with the file throw InputError, with the ParseError's message.
+inline LabelledCsv read_labelled_csv(const std::string& path, const ColumnSelection& sel) {
+  try {
+    io::TextFile file(path);
+    return read_labelled_csv(file, sel);
+  } catch (const io::ParseError& e) {
+    throw InputError(e.what());
+  }
 }
 
 /// Accuracy, balanced accuracy, macro-F1, per-class precision / recall / F1 and the labelled

@@ -2,16 +2,13 @@
 // eq. 18-28) on a time-ordered labelled feature CSV such as `features nmea` writes, with the
 // region transition matrix (eq. 36-37) of the joint labels.
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <map>
 #include <string>
 #include <string_view>
-#include <system_error>
 #include <vector>
 
 #include <ctxfuse/classify/hmm.hpp>
@@ -20,6 +17,7 @@
 #include <ctxfuse/classify/svm.hpp>
 #include <ctxfuse/classify/svm_train.hpp>
 #include <ctxfuse/classify/confusion_matrix.hpp>
+#include <ctxfuse/io/text.hpp>
 
 #include "cli/options.hpp"
 #include "cli/registry.hpp"
@@ -28,6 +26,7 @@ namespace {
 
 using ctxfuse::cli::Args;
 namespace cls = ctxfuse::classify;
+namespace io = ctxfuse::io;
 
 constexpr std::string_view kHelp =
     "The region paper's joint classifier (SVM + HMM, weighted vote, eq. 18-28). CSVs: header, integer\n"
@@ -45,57 +44,29 @@ struct Table {
   int features = 0;
 };
 
+/// Every column but `label` is a feature; every field must be a finite number.
 Table read_table(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot open '" + path + "'");
+  io::TextFile file(path);
   Table t;
-  std::string line;
-  std::size_t line_no = 0;
-  std::vector<std::string> names;
-  int label_col = -1;
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty()) continue;
-    std::vector<std::string_view> f;
-    std::string_view rest(line);
-    while (true) {
-      const auto c = rest.find(',');
-      f.push_back(rest.substr(0, c));
-      if (c == std::string_view::npos) break;
-      rest.remove_prefix(c + 1);
-    }
-    if (names.empty()) {
-      for (std::size_t i = 0; i < f.size(); ++i) {
-        names.emplace_back(f[i]);
-        if (f[i] == "label") label_col = static_cast<int>(i);
-      }
-      if (label_col < 0) throw std::runtime_error(path + ":1: no 'label' column");
-      t.features = static_cast<int>(names.size()) - 1;
-      continue;
-    }
-    if (f.size() != names.size())
-      throw std::runtime_error(path + ":" + std::to_string(line_no) + ": " + std::to_string(f.size()) +
-                               " fields, header has " + std::to_string(names.size()));
+  std::string_view line;
+  do {
+    if (!file.next(line)) throw io::ParseError(file.name(), 0, 0, "", "no data rows");
+  } while (io::trim(line).empty());
+  const io::Header header(io::split_fields(line, io::Separator::comma));
+  std::size_t label_col = io::require_column(file, header, "label");
+  for (std::size_t i = label_col + 1; i < header.size(); ++i)  // of several, the last; the others are features
+    if (header.name(i) == "label") label_col = i;
+  t.features = static_cast<int>(header.size()) - 1;
+  io::Fields f(file.name(), &header);
+  while (io::next_fields(file, f, io::Separator::comma)) {
+    f.expect_count(header.size());
     std::vector<double> row;
-    for (std::size_t i = 0; i < f.size(); ++i) {
-      double v = 0;
-      const auto [p, ec] = std::from_chars(f[i].data(), f[i].data() + f[i].size(), v);
-      if (f[i].empty() || ec != std::errc{} || p != f[i].data() + f[i].size() || !std::isfinite(v))
-        throw std::runtime_error(path + ":" + std::to_string(line_no) + ": column '" + names[i] + "': '" +
-                                 std::string(f[i]) + "' is not a finite number");
-      if (static_cast<int>(i) == label_col) {
-        if (v != std::floor(v) || v < 0 || v > 2)
-          throw std::runtime_error(path + ":" + std::to_string(line_no) + ": label '" + std::string(f[i]) +
-                                   "' is not a region 0, 1 or 2");
-        t.labels.push_back(static_cast<int>(v));
-      } else {
-        row.push_back(v);
-      }
-    }
+    for (std::size_t i = 0; i < f.size(); ++i)
+      if (i == label_col) t.labels.push_back(f.whole<int>(i, 0, 2));  // a region 0, 1 or 2
+      else row.push_back(f.real(i, io::kAnyFinite));
     t.rows.push_back(std::move(row));
   }
-  if (t.rows.empty()) throw std::runtime_error(path + ": no data rows");
+  if (t.rows.empty()) throw io::ParseError(file.name(), 0, 0, "", "no data rows");
   return t;
 }
 

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <ostream>
 #include <string>
@@ -12,7 +11,8 @@
 #include <vector>
 
 #include <ctxfuse/features/dw1000.hpp>
-#include <ctxfuse/io/uwb_static.hpp>  // detail::split_csv_line, parse_field, number_in_name
+#include <ctxfuse/io/text.hpp>
+#include <ctxfuse/io/uwb_static.hpp>  // detail::number_in_name
 
 #include "cli/features_common.hpp"
 #include "cli/options.hpp"
@@ -22,8 +22,6 @@ namespace {
 
 namespace feat = ctxfuse::features;
 namespace fs = std::filesystem;
-using ctxfuse::io::detail::parse_field;
-using ctxfuse::io::detail::split_csv_line;
 
 struct Frame {
   int label = -1;  // -1: none
@@ -40,46 +38,35 @@ struct Counts {
 /// A row with an unparsable used field is an error unless `skip_bad_rows` (then counted).
 std::vector<Frame> read_frames(const fs::path& path, const std::map<std::string, std::string>& names, bool skip_bad_rows,
                                Counts& counts) {
-  std::ifstream in(path);
-  if (!in) throw InputError("cannot open '" + path.string() + "'");
-  std::string line;
-  if (!std::getline(in, line)) throw InputError(path.string() + ":1: empty file (no header)");
-  const auto header = split_csv_line(line);
-  const std::vector<std::string> cols(header.begin(), header.end());
+  io::TextFile file(path);
+  const io::Header header = io::read_header(file, io::Separator::comma);
   const auto col = [&](const std::string& key, bool required) {
-    const auto it = std::find(cols.begin(), cols.end(), names.at(key));
-    if (it == cols.end() && required) throw InputError(path.string() + ":1: column '" + names.at(key) + "' missing from the header");
-    return it == cols.end() ? -1 : static_cast<int>(it - cols.begin());
+    if (required) return static_cast<int>(io::require_column(file, header, names.at(key)));
+    const auto c = header.find(names.at(key));
+    return c ? static_cast<int>(*c) : -1;
   };
   const int c_range = col("range", true), c_f1 = col("fp1", true), c_f2 = col("fp2", true), c_f3 = col("fp3", true),
             c_cir = col("cir", true), c_pacc = col("rxpacc", true), c_noise = col("noise", true), c_label = col("label", false),
             c_prf = col("prf", false);
   std::vector<Frame> out;
-  std::size_t line_no = 1;
+  io::Fields f(file.name(), &header);
   ++counts.files;
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (line.empty() || line == "\r") continue;
-    const auto f = split_csv_line(line);
+  while (io::next_fields(file, f, io::Separator::comma)) {
     double first = 0;
-    if (skip_bad_rows && (f.empty() || !parse_field(f[0], first))) break;
-    const auto where = [&](int c) { return path.string() + ":" + std::to_string(line_no) + ": column '" + cols[static_cast<std::size_t>(c)] + "'"; };
-    if (f.size() != cols.size()) {
-      if (skip_bad_rows) {
-        ++counts.skipped_unparsable;
-        continue;
-      }
-      throw InputError(path.string() + ":" + std::to_string(line_no) + ": " + std::to_string(f.size()) + " fields, header has " +
-                       std::to_string(cols.size()));
+    if (skip_bad_rows && io::parse_real(f[0], first, io::kAnyReal) != io::NumberError::none) break;
+    if (f.size() != header.size() && skip_bad_rows) {
+      ++counts.skipped_unparsable;
+      continue;
     }
+    f.expect_count(header.size());
     Frame fr;
     bool ok = true;
+    // Finite values only; a bad one throws, or with `skip_bad_rows` drops the row.
     const auto get = [&](int c, double& v) {
       if (c < 0 || !ok) return;
-      if (!parse_field(f[static_cast<std::size_t>(c)], v) || !std::isfinite(v)) {
-        if (!skip_bad_rows) throw InputError(where(c) + ": '" + std::string(f[static_cast<std::size_t>(c)]) + "' is not a finite number");
-        ok = false;
-      }
+      const auto i = static_cast<std::size_t>(c);
+      if (!skip_bad_rows) v = f.real(i, io::kAnyFinite);
+      else ok = io::parse_real(f[i], v, io::kAnyFinite) == io::NumberError::none;
     };
     double label = -1;
     get(c_range, fr.d.range_m);
@@ -95,8 +82,7 @@ std::vector<Frame> read_frames(const fs::path& path, const std::map<std::string,
       ++counts.skipped_unparsable;
       continue;
     }
-    if (c_label >= 0 && (label != std::floor(label) || std::abs(label) > 1e9)) throw InputError(where(c_label) + ": not an integer label");
-    fr.label = c_label >= 0 ? static_cast<int>(label) : -1;
+    fr.label = c_label >= 0 ? f.whole<int>(static_cast<std::size_t>(c_label), -1'000'000'000, 1'000'000'000) : -1;
     out.push_back(fr);
   }
   return out;

@@ -16,7 +16,7 @@
 #include <vector>
 
 #include <ctxfuse/features/gnss_scene.hpp>
-#include <ctxfuse/io/uwb_static.hpp>  // detail::split_csv_line, detail::parse_field
+#include <ctxfuse/io/text.hpp>
 
 #include "cli/features_common.hpp"
 #include "cli/options.hpp"
@@ -25,42 +25,9 @@ namespace ctxfuse::cli::features_cli {
 namespace {
 
 namespace feat = ctxfuse::features;
-using ctxfuse::io::detail::parse_field;
-using ctxfuse::io::detail::split_csv_line;
-
-struct Table {
-  std::vector<std::string> names;
-  std::vector<std::vector<std::string>> rows;
-  std::vector<std::size_t> lines;  // line number of each row
-  int column(std::string_view name) const {
-    const auto it = std::find(names.begin(), names.end(), name);
-    return it == names.end() ? -1 : static_cast<int>(it - names.begin());
-  }
-};
-
-Table read_table(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError("cannot open '" + path + "'");
-  Table t;
-  std::string line;
-  std::size_t line_no = 1;
-  if (!std::getline(in, line)) throw InputError(path + ":1: empty file (no header)");
-  for (auto n : split_csv_line(line)) t.names.emplace_back(n);
-  while (std::getline(in, line)) {
-    ++line_no;
-    if (line.empty() || line == "\r") continue;
-    const auto f = split_csv_line(line);
-    if (f.size() != t.names.size())
-      throw InputError(path + ":" + std::to_string(line_no) + ": " + std::to_string(f.size()) + " fields, header has " +
-                       std::to_string(t.names.size()));
-    t.rows.emplace_back(f.begin(), f.end());
-    t.lines.push_back(line_no);
-  }
-  return t;
-}
 
 struct SatRow {
-  std::size_t row = 0;
+  std::size_t line = 0;  // in the satellite CSV
   feat::SatelliteObservation sat;
   double pdop = std::nan("");
 };
@@ -87,63 +54,66 @@ int run_gnss(Args args, std::ostream& out, std::ostream& err) {
   add_window_options(app, config);
   if (const auto status = parse_options(app, args, out, err)) return *status;
   try {
-    const Table t = read_table(sats_path);
-    const int c_time = t.column("time_s"), c_id = t.column("sat_id"), c_el = t.column("elevation_deg"),
-              c_az = t.column("azimuth_deg"), c_cn0 = t.column("cn0_dbhz"), c_pdop = t.column("pdop");
-    for (auto [c, n] : {std::pair{c_time, "time_s"}, {c_id, "sat_id"}, {c_el, "elevation_deg"}, {c_az, "azimuth_deg"}, {c_cn0, "cn0_dbhz"}})
-      if (c < 0) throw InputError(sats_path + ":1: column '" + n + "' missing from the header");
-    const auto fail = [&](std::size_t r, int c, std::string_view why) {
-      return InputError(sats_path + ":" + std::to_string(t.lines[r]) + ": column '" + t.names[static_cast<std::size_t>(c)] + "': '" +
-                        t.rows[r][static_cast<std::size_t>(c)] + "' " + std::string(why));
-    };
+    io::TextFile sat_file(sats_path);
+    const io::Header header = io::read_header(sat_file, io::Separator::comma);
+    const std::size_t c_time = io::require_column(sat_file, header, "time_s"), c_id = io::require_column(sat_file, header, "sat_id"),
+                      c_el = io::require_column(sat_file, header, "elevation_deg"),
+                      c_az = io::require_column(sat_file, header, "azimuth_deg"),
+                      c_cn0 = io::require_column(sat_file, header, "cn0_dbhz");
+    const auto c_pdop = header.find("pdop");
     // Epochs by time; rows of one epoch may come in any order.
     std::map<double, std::vector<SatRow>> epochs;
     std::map<std::string, int> ids;
     std::size_t without_geometry = 0;
-    for (std::size_t r = 0; r < t.rows.size(); ++r) {
-      const auto& f = t.rows[r];
-      const auto field = [&](int c) -> const std::string& { return f[static_cast<std::size_t>(c)]; };
-      double time = 0;
-      if (!parse_field(field(c_time), time) || !std::isfinite(time)) throw fail(r, c_time, "is not a finite time");
+    io::Fields row(sat_file.name(), &header);
+    while (io::next_fields(sat_file, row, io::Separator::comma)) {
+      row.expect_count(header.size());
+      const double time = row.real(c_time, io::kAnyFinite);
       auto& epoch = epochs[time];
       SatRow s;
-      s.row = r;
-      if (c_pdop >= 0 && !field(c_pdop).empty() &&
-          (!parse_field(field(c_pdop), s.pdop) || !(s.pdop > 0.0) || !std::isfinite(s.pdop)))
-        throw fail(r, c_pdop, "is not a positive number");
-      if (field(c_id).empty()) {  // epoch marker without satellites
-        s.sat.id = -1;
+      s.line = row.line();
+      if (c_pdop && !row[*c_pdop].empty()) {
+        s.pdop = row.real(*c_pdop, io::kAnyFinite);
+        if (!(s.pdop > 0.0)) row.fail(*c_pdop, io::quote(row[*c_pdop]) + " is not a positive number");
+      }
+      // Adds the row to its epoch, whose rows must agree on the pdop.
+      const auto add = [&] {
+        for (const auto& o : epoch)
+          if (std::isfinite(s.pdop) && std::isfinite(o.pdop) && o.pdop != s.pdop)
+            row.fail(*c_pdop, io::cat(io::quote(row[*c_pdop]), " differs from the epoch's other pdop (line ", o.line, ")"));
         epoch.push_back(s);
+      };
+      if (row[c_id].empty()) {  // epoch marker without satellites
+        s.sat.id = -1;
+        add();
         continue;
       }
-      s.sat.id = ids.emplace(field(c_id), static_cast<int>(ids.size())).first->second;
-      double el = std::nan(""), az = std::nan("");
-      if (!field(c_el).empty() && !parse_field(field(c_el), el)) throw fail(r, c_el, "is not a number");
-      if (!field(c_az).empty() && !parse_field(field(c_az), az)) throw fail(r, c_az, "is not a number");
+      s.sat.id = ids.emplace(row[c_id], static_cast<int>(ids.size())).first->second;
+      // Any spelling of a number, inf and nan included: what is not in range is unknown.
+      const double el = row[c_el].empty() ? std::nan("") : row.real(c_el, io::kAnyReal);
+      const double az = row[c_az].empty() ? std::nan("") : row.real(c_az, io::kAnyReal);
       const bool known = std::abs(el) <= 90.0 && az >= 0.0 && az <= 360.0;  // false for NaN
       s.sat.elevation_deg = known ? el : std::nan("");
       s.sat.azimuth_deg = known ? az : std::nan("");
-      if (!field(c_cn0).empty() &&
-          (!parse_field(field(c_cn0), s.sat.cn0_dbhz) || !(s.sat.cn0_dbhz >= 0.0 && s.sat.cn0_dbhz <= 100.0)))
-        throw fail(r, c_cn0, "is not a C/N0 in [0, 100] dB-Hz");
+      if (!row[c_cn0].empty()) s.sat.cn0_dbhz = row.real_in(c_cn0, 0.0, 100.0);
       if (!known && std::isfinite(s.sat.cn0_dbhz)) ++without_geometry;
       for (const auto& o : epoch)
         if (o.sat.id == s.sat.id)
-          throw fail(r, c_id, "appears twice in the epoch at time_s " + fmt(time) + " (also line " + std::to_string(t.lines[o.row]) + ")");
-      epoch.push_back(s);
+          row.fail(c_id, io::cat(io::quote(row[c_id]), " appears twice in the epoch at time_s ", fmt(time), " (also line ", o.line, ")"));
+      add();
     }
     // Labels by time.
     std::vector<std::pair<double, int>> labels;
     if (!labels_path.empty()) {
-      const Table l = read_table(labels_path);
-      const int lt = l.column("time_s"), ll = l.column("label");
-      if (lt < 0 || ll < 0) throw InputError(labels_path + ":1: needs columns time_s and label");
-      for (std::size_t r = 0; r < l.rows.size(); ++r) {
-        double time = 0, label = 0;
-        if (!parse_field(l.rows[r][static_cast<std::size_t>(lt)], time) || !std::isfinite(time) ||
-            !parse_field(l.rows[r][static_cast<std::size_t>(ll)], label) || label != std::floor(label) || std::abs(label) > 1e9)
-          throw InputError(labels_path + ":" + std::to_string(l.lines[r]) + ": time_s must be a number and label an integer");
-        labels.emplace_back(time, static_cast<int>(label));
+      io::TextFile label_file(labels_path);
+      const io::Header label_header = io::read_header(label_file, io::Separator::comma);
+      const std::size_t c_t = io::require_column(label_file, label_header, "time_s"),
+                        c_label = io::require_column(label_file, label_header, "label");
+      io::Fields label_row(label_file.name(), &label_header);
+      while (io::next_fields(label_file, label_row, io::Separator::comma)) {
+        label_row.expect_count(label_header.size());
+        const double time = label_row.real(c_t, io::kAnyFinite);
+        labels.emplace_back(time, label_row.whole<int>(c_label, -1'000'000'000, 1'000'000'000));
       }
       std::sort(labels.begin(), labels.end());
     }
@@ -169,17 +139,14 @@ int run_gnss(Args args, std::ostream& out, std::ostream& err) {
       sats.clear();
       double pdop = std::nan("");
       for (const auto& s : rows) {
-        if (std::isfinite(s.pdop)) {
-          if (std::isfinite(pdop) && pdop != s.pdop) throw fail(s.row, c_pdop, "differs from the epoch's other pdop");
-          pdop = s.pdop;
-        }
+        if (std::isfinite(s.pdop)) pdop = s.pdop;  // the same in every row that has one
         if (s.sat.id >= 0) sats.push_back(s.sat);
       }
       feat::GnssSceneFeatures f;
       const auto status = extractor.push({time, sats, pdop}, f);
       if (status != feat::GnssFeatureStatus::ok)
-        throw InputError(sats_path + ":" + std::to_string(t.lines[rows.front().row]) + ": epoch at time_s " + fmt(time) + ": " +
-                         std::string(feat::describe(status)));
+        throw io::ParseError(sat_file.name(), rows.front().line, 0, "",
+                             io::cat("epoch at time_s ", fmt(time), ": ", feat::describe(status)));
       std::optional<int> label;
       if (!labels_path.empty() && !(label = label_of(time))) {
         ++unlabelled;

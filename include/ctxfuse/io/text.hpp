@@ -16,6 +16,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <fstream>
+#include <istream>
 #include <limits>
 #include <optional>
 #include <stdexcept>
@@ -155,6 +156,12 @@ struct RealRules {
   double max_abs = 1e19;
 };
 
+/// Every finite value, however large: for columns whose writer sets no bound (features,
+/// model parameters).
+inline constexpr RealRules kAnyFinite{false, std::numeric_limits<double>::max()};
+/// Every value, the inf/-inf/nan spellings included, however large.
+inline constexpr RealRules kAnyReal{true, std::numeric_limits<double>::max()};
+
 namespace detail {
 // from_chars has no '+' (it follows strtod's C-locale grammar minus the sign); loggers write one.
 inline std::string_view drop_plus(std::string_view s) {
@@ -237,16 +244,20 @@ class Header {
 /// A text file read line by line, knowing where it is for error messages.
 class TextFile {
  public:
-  explicit TextFile(const std::filesystem::path& path) : name_(path.string()), in_(path, std::ios::binary) {
-    if (!in_) throw ParseError(name_, 0, 0, "", "cannot open file");
+  explicit TextFile(const std::filesystem::path& path) : name_(path.string()), file_(path, std::ios::binary) {
+    if (!file_) throw ParseError(name_, 0, 0, "", "cannot open file");
   }
+  /// The lines of a stream the caller has opened (text in memory, a block of a larger file),
+  /// called `name` in errors and counted from 1. The stream must outlive this reader.
+  TextFile(std::istream& in, std::string name) : name_(std::move(name)), stream_(&in) {}
 
   /// Next line without its line ending; false at the end of the file. `ended_by_newline`
   /// tells whether it had one (a logger's cut-off last line does not).
   bool next(std::string_view& line) {
-    if (!std::getline(in_, buffer_)) return false;
+    std::istream& in = stream_ ? *stream_ : file_;
+    if (!std::getline(in, buffer_)) return false;
     ++line_number_;
-    ended_by_newline_ = !in_.eof();
+    ended_by_newline_ = !in.eof();
     if (!buffer_.empty() && buffer_.back() == '\r') buffer_.pop_back();
     line = buffer_;
     return true;
@@ -259,11 +270,27 @@ class TextFile {
 
  private:
   std::string name_;
-  std::ifstream in_;
+  std::ifstream file_;               // read when opened from a path
+  std::istream* stream_ = nullptr;  // read instead when given
   std::string buffer_;
   std::size_t line_number_ = 0;
   bool ended_by_newline_ = true;
 };
+
+/// The header of a file that has one on its first line; a ParseError when the file is empty.
+inline Header read_header(TextFile& file, Separator sep) {
+  std::string_view line;
+  if (!file.next(line)) file.fail("empty file (no header)");
+  return Header(split_fields(line, sep));
+}
+
+/// Index of a column the reader needs. A header without it fails at the file's current line
+/// (the header's, when called right after reading it).
+inline std::size_t require_column(const TextFile& file, const Header& header, std::string_view name) {
+  const auto i = header.find(name);
+  if (!i) file.fail(cat("header has no column ", quote(name)));
+  return *i;
+}
 
 /// The fields of one line with their location: typed accessors that throw ParseError.
 class Fields {

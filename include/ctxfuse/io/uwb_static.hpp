@@ -20,7 +20,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <limits>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -52,20 +51,6 @@ struct UwbStaticReadStats {
 
 namespace detail {
 
-// The CLI's feature commands (tools/cli/features.cpp) read their CSVs with these two names
-// from this reader's first version; they are the io/text.hpp splitter and parser.
-inline std::vector<std::string_view> split_csv_line(std::string_view line) {
-  return io::split_fields(line, io::Separator::comma);
-}
-
-/// Whole-field double, inf/-inf/nan spellings accepted, no magnitude bound.
-inline bool parse_field(std::string_view s, double& out) {
-  io::RealRules any;
-  any.allow_non_finite = true;
-  any.max_abs = std::numeric_limits<double>::max();
-  return io::parse_real(s, out, any) == io::NumberError::none;
-}
-
 /// Leading number of a name such as "58m.csv" or "height_62.5cm"; NaN when absent.
 inline double number_in_name(std::string_view name, std::string_view prefix, std::string_view suffix) {
   if (name.size() <= prefix.size() + suffix.size() || name.substr(0, prefix.size()) != prefix ||
@@ -82,15 +67,10 @@ inline double number_in_name(std::string_view name, std::string_view prefix, std
 inline std::vector<UwbStaticRange> read_uwb_static_file(const std::filesystem::path& path, double true_distance_m,
                                                         bool nlos, double height_cm, UwbStaticReadStats& stats) {
   io::TextFile file(path);
-  std::string_view line;
-  if (!file.next(line)) throw io::ParseError(file.name(), 1, 0, "", "empty file (no header)");
-  const io::Header header(io::split_fields(line, io::Separator::comma));
-  auto column = [&](std::string_view name) {
-    const auto c = header.find(name);
-    if (!c) throw io::ParseError(file.name(), 1, 0, std::string(name), "column missing from the header");
-    return *c;
-  };
-  const std::size_t c_dist = column("Distance"), c_rssi = column("RSSI(dBm)"), c_fp = column("RSSI_fp(dBm)");
+  const io::Header header = io::read_header(file, io::Separator::comma);
+  const std::size_t c_dist = io::require_column(file, header, "Distance"),
+                    c_rssi = io::require_column(file, header, "RSSI(dBm)"),
+                    c_fp = io::require_column(file, header, "RSSI_fp(dBm)");
   io::Fields f(file.name(), &header);
   io::RealRules power;  // the chip writes -inf when a power estimate fails
   power.allow_non_finite = true;
