@@ -103,7 +103,9 @@ int main(int argc, char** argv) {
       truth = KnownRateTurn{kTurnRate}.predict(truth, {}, kDt, nullptr);
     else
       truth = models::ConstantVelocity<L, 2>{}.predict(truth, {}, kDt, nullptr);
-    const Vector<2> z(truth(0) + kFixSigma * rng.normal(), truth(1) + kFixSigma * rng.normal());
+    // Two named draws: the order in which a constructor's arguments are evaluated is unspecified.
+    const double noise_x = rng.normal(), noise_y = rng.normal();
+    const Vector<2> z(truth(0) + kFixSigma * noise_x, truth(1) + kFixSigma * noise_y);
 
     // One call: mix, predict every mode by kDt, correct every mode with the fix (and score
     // it), update the mode probabilities.

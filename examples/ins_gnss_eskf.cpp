@@ -52,7 +52,7 @@ int main(int argc, char** argv) {
       const sim::GnssEpoch& e = drive.gnss[next_fix];
       if (!e.has_fix || e.t <= filter.time()) continue;
       // A fix is applied at its own epoch only: if the prediction to it is refused, skip it.
-      if (!filter.predict_to(e.t, models::ImuSample{s.gyro, s.accel})) continue;
+      if (!filter.predict_to(e.t, s)) continue;
       models::GnssPosition<> fix;
       fix.R = Vector<3>(e.std_horizontal_m * e.std_horizontal_m, e.std_horizontal_m * e.std_horizontal_m,
                         e.std_vertical_m * e.std_vertical_m).asDiagonal();
@@ -60,7 +60,7 @@ int main(int argc, char** argv) {
       accepted += st.accepted();
       gated += st.outcome == Outcome::gated;
     }
-    if (!filter.predict_to(s.t, models::ImuSample{s.gyro, s.accel})) continue;
+    if (!filter.predict_to(s.t, s)) continue;
     while (truth_index + 1 < drive.truth.size() && drive.truth[truth_index].t < s.t) ++truth_index;
     const sim::TruthSample& truth = drive.truth[truth_index];
     const double e2 = (filter.nominal().p - truth.position).head<2>().squaredNorm();

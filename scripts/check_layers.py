@@ -6,8 +6,10 @@
 Every header under DIR/include/ctxfuse/ (default: this repository) may include headers of its
 own folder and of the folders of lower layers, never of a higher layer or of a folder on its
 own layer; the pipelines' folders (pipelines/<name>/) never include one another, apart from
-the exceptions listed below with their reason. Prints each offending include as
-file:line: and exits 1 when there is one, 0 otherwise.
+the exceptions listed below with their reason. SVM training (the headers that include
+libsvm's svm.h) is included only by training headers (*/training.hpp), by studies/ and by the
+training headers of classify/ themselves, so that inference never needs libsvm. Prints each
+offending include as file:line: and exits 1 when there is one, 0 otherwise.
 """
 import argparse
 import pathlib
@@ -37,6 +39,17 @@ PIPELINE_EXCEPTIONS = {
     ("nlos_uwb", "region_imm"): "nlos_uwb's IMU filters reuse region_imm's alignment and "
     "planar models until the range estimators are one component",
 }
+
+# The headers that include libsvm, and who may include them: a pipeline's training header,
+# the studies (they train on other recordings), each other, and a pipeline's umbrella header
+# (pipelines/<name>.hpp, which gathers training too).
+LIBSVM_HEADERS = {"classify/svm_train.hpp", "classify/svm_tune.hpp"}
+
+
+def may_include_libsvm(rel):
+    return (rel.name == "training.hpp" or rel.parts[0] == "studies" or str(rel) in LIBSVM_HEADERS
+            or (rel.parts[0] == "pipelines" and len(rel.parts) == 2))
+
 
 # ctxfuse.hpp, the umbrella header, sits above the engine it gathers.
 TOP_LEVEL_ALLOWED = {"core", "messages", "models", "policies", "filters"}
@@ -73,6 +86,8 @@ def check(root):
                 problems.append(f"{where}: includes the umbrella header ctxfuse/{m.group(1)}")
                 continue
             to = target[0]
+            if m.group(1) in LIBSVM_HEADERS and not may_include_libsvm(rel):
+                problems.append(f"{where}: includes ctxfuse/{m.group(1)} (libsvm) outside a training header")
             if rank_of(to) is None:
                 problems.append(f"{where}: includes ctxfuse/{m.group(1)}, a folder with no layer")
                 continue

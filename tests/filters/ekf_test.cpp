@@ -168,4 +168,24 @@ TEST(Ekf, PredictToChecksTimeOrder) {
   EXPECT_EQ(kf.predict_to(1.5, {}).problem, Problem::non_positive_dt);
 }
 
+// predict(u, dt) moves a set clock on by dt, so that predict and predict_to mixed predict each
+// interval once: 1.0 -> 1.25 by dt, then predict_to(1.5) predicts the remaining 0.25 s. (This
+// model's Q is per step: each of the three accepted steps adds 1 to the variance.) Without a
+// clock, predict leaves the time unset.
+TEST(Ekf, PredictByDtMovesASetClockOn) {
+  models::LinearProcess<1> f;
+  f.Q(0, 0) = 1.0;
+  Ekf<models::LinearProcess<1>> kf(f, {Vector<1>(0.0), SquareMatrix<1>(1.0)});
+  ASSERT_TRUE(kf.predict({}, 0.25));
+  EXPECT_TRUE(std::isnan(kf.time()));
+  kf.set_time(1.0);
+  ASSERT_TRUE(kf.predict({}, 0.25));
+  EXPECT_EQ(kf.time(), 1.25);
+  ASSERT_TRUE(kf.predict_to(1.5, {}));
+  EXPECT_EQ(kf.time(), 1.5);
+  EXPECT_DOUBLE_EQ(kf.belief().cov(0, 0), 4.0);
+  EXPECT_EQ(kf.predict({}, -0.1).problem, Problem::non_positive_dt);
+  EXPECT_EQ(kf.time(), 1.5);
+}
+
 }  // namespace

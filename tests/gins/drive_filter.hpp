@@ -79,7 +79,7 @@ DriveResult run_drive(const Drive& d, const Model& model, eskf::Belief<Model>& b
   for (std::size_t k = 0; k < d.steps.size(); ++k) {
     const DriveStep& s = d.steps[k];
     if (!eskf::predict(model, b, s.imu, d.dt).accepted()) return {1e9, 1e9, -1};
-    const bool is_static = detector.push(s.gyro_rate, s.accel_rate);
+    const bool is_static = detector.push(s.t, s.gyro_rate, s.accel_rate);
     const bool in_outage = s.t >= outage_start && s.t < outage_end;
     const bool tenth = k % 10 == 9;
     const Eigen::Matrix3d C = nav_part<Model>(b.nominal).template get<"theta">().toRotationMatrix();

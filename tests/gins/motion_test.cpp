@@ -10,24 +10,44 @@ using namespace ctxfuse;
 using namespace ctxfuse::models;
 constexpr double kDeg = test::kDeg;
 
+// The defaults (0.5 s, 0.25 deg/s on the window's mean rate, 0.25 m/s^2 on its std of |f|) at
+// 100 Hz: static once a full quiet window has come and only then; the mean rate of a slow turn
+// and a bump in |f| end it; a non-finite sample or one not after the previous is ignored.
 TEST(StaticDetector, StaticAfterAFullQuietWindowAndOnlyThen) {
-  StaticDetector d;  // 50 samples, 0.25 m/s^2, 0.25 deg/s
   const Eigen::Vector3d f(0.1, -0.2, -9.79);
-  for (int i = 0; i < 49; ++i) EXPECT_FALSE(d.push(Eigen::Vector3d(0.001, 0.0, 0.0), f));
-  EXPECT_TRUE(d.push(Eigen::Vector3d(0.001, 0.0, 0.0), f));
+  const Eigen::Vector3d quiet(0.001 * kDeg, 0.0, 0.0);
+  StaticDetector d;
+  double t = 0.0;
+  // The window's count is fixed from the rate once 50 samples (0.5 s at 100 Hz) have come.
+  for (int i = 0; i < 49; ++i, t += 0.01) EXPECT_FALSE(d.push(t, quiet, f)) << i;
+  EXPECT_TRUE(d.push(t, quiet, f));
+  EXPECT_EQ(d.window_samples(), 50);
   EXPECT_TRUE(d.entered_static());
-  EXPECT_TRUE(d.push(Eigen::Vector3d(0.001, 0.0, 0.0), f));
+  t += 0.01;
+  EXPECT_TRUE(d.push(t, quiet, f));
   EXPECT_FALSE(d.entered_static());  // only on the first static sample
-  // A turn at 0.3 deg/s ends it, and so does a bump of 0.3 m/s^2.
-  EXPECT_FALSE(d.push(Eigen::Vector3d(0.0, 0.0, 0.3 * kDeg), f));
+  // A turn at 0.3 deg/s: the window's mean rate passes 0.25 deg/s after 42 of its 50 samples.
+  int turned = 0;
+  while (d.is_static() && turned < 100) {
+    t += 0.01;
+    d.push(t, Eigen::Vector3d(0.0, 0.0, 0.3 * kDeg), f);
+    ++turned;
+  }
+  EXPECT_EQ(turned, 42);
+  // A bump: |f| alternating +-0.3 m/s^2 has a std of 0.3 over the window.
   StaticDetector e;
-  for (int i = 0; i < 60; ++i) e.push(Eigen::Vector3d::Zero(), f);
+  t = 0.0;
+  for (int i = 0; i < 60; ++i, t += 0.01) e.push(t, Eigen::Vector3d::Zero(), f);
   ASSERT_TRUE(e.is_static());
-  EXPECT_FALSE(e.push(Eigen::Vector3d::Zero(), f + Eigen::Vector3d(0.0, 0.0, -0.3)));
-  // A non-finite sample is ignored, not taken as motion or rest.
+  for (int i = 0; i < 50; ++i, t += 0.01) e.push(t, Eigen::Vector3d::Zero(), f * (1.0 + (i % 2 ? 0.3 : -0.3) / f.norm()));
+  EXPECT_FALSE(e.is_static());
+  // A non-finite sample, or one at the previous stamp, is ignored: not motion, not rest.
   StaticDetector n;
-  for (int i = 0; i < 60; ++i) n.push(Eigen::Vector3d::Zero(), f);
-  EXPECT_TRUE(n.push(Eigen::Vector3d(std::nan(""), 0, 0), f));
+  t = 0.0;
+  for (int i = 0; i < 60; ++i, t += 0.01) n.push(t, Eigen::Vector3d::Zero(), f);
+  EXPECT_TRUE(n.push(t, Eigen::Vector3d(std::nan(""), 0, 0), f));
+  EXPECT_TRUE(n.push(t - 0.01, Eigen::Vector3d(1.0, 0, 0), f));
+  EXPECT_TRUE(n.is_static());
 }
 
 TEST(MagRelativeHeading, MeasuresTheHeadingChangeWhateverTheTilt) {

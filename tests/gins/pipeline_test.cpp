@@ -187,7 +187,7 @@ TEST(GinsPipeline, MagnetometerStreamHoldsTheHeadingThroughTheOutage) {
 // After a fault has led the filter astray beyond what its covariance admits (an accelerometer
 // offset of 0.6 m/s^2 through the 15 s outage: 9 m/s and some 70 m off at its end), the fixes'
 // positions and velocities are both refused by the gate; three in a row of each are released
-// (Settings::gate_release_count, ForwardPass::release) and the filter is back on the fixes.
+// (Settings::gate_release, filters/release.hpp) and the filter is back on the fixes.
 // With releases off it is not.
 TEST(GinsPipeline, GnssPositionAndVelocityAreReleasedAfterAnImuFault) {
   const double t_first = recording().fixes.front().t;
@@ -199,7 +199,7 @@ TEST(GinsPipeline, GnssPositionAndVelocityAreReleasedAfterAnImuFault) {
   o.gnss_rate_hz = 1.0;
   auto run_with = [&](int release_count) {
     gins::Settings s;
-    s.gate_release_count = release_count;
+    s.gate_release.min_rejections = release_count;
     return gins::run<gins::Nav20>(imu, recording().fixes, s, o);
   };
   // Horizontal position [m] and velocity [m/s] error against the fix at t_first + at_s.
@@ -217,7 +217,7 @@ TEST(GinsPipeline, GnssPositionAndVelocityAreReleasedAfterAnImuFault) {
     }
     return std::pair{double(NAN), double(NAN)};
   };
-  const gins::RunResult released = run_with(gins::Settings{}.gate_release_count);
+  const gins::RunResult released = run_with(gins::Settings{}.gate_release.min_rejections);
   const gins::RunResult never = run_with(1000000);
   const auto [p_end, v_end] = off_at(never, 35.0);
   const auto [p_rel, v_rel] = off_at(released, 45.0);

@@ -271,18 +271,31 @@ TEST(Rts, AZeroVarianceWithCrossCovarianceIsRefused) {
   EXPECT_EQ(rec.records()[0].posterior.cov, b.cov);
 }
 
-TEST(Rts, RefusesAnEpochThatDoesNotAdvanceAndKeepsTheRecords) {
+// The rule of filters/rts_gain.hpp, the same as the fixed-lag ring's: a second update at the
+// newest epoch's time with no prediction since joins it (posterior replaced, prior kept);
+// after a prediction, or before the newest epoch, it is refused and the records stay.
+TEST(Rts, JoinsASecondUpdateAtTheSameTimeAndRefusesAnEpochThatGoesBack) {
   RtsRecorder<ConstantVelocity> rec;
   eskf::Belief<ConstantVelocity> b;
   b.nominal.setZero();
   b.cov.setIdentity();
   EXPECT_EQ(rec.record(1.0, b, b).problem, Problem::time_not_set);
   rec.start(1.0, b);
-  EXPECT_EQ(rec.record(1.0, b, b).problem, Problem::out_of_order_time);
   EXPECT_EQ(rec.record(0.5, b, b).problem, Problem::out_of_order_time);
-  EXPECT_EQ(rec.records().size(), 1u);
   EXPECT_TRUE(rec.record(2.0, b, b).accepted());
+  ASSERT_EQ(rec.records().size(), 2u);
+  eskf::Belief<ConstantVelocity> second = b;
+  second.nominal(0) = 3.0;
+  second.cov *= 0.5;
+  EXPECT_TRUE(rec.record(2.0, b, second).accepted());
+  ASSERT_EQ(rec.records().size(), 2u);
+  EXPECT_EQ(rec.records().back().posterior.nominal, second.nominal);
+  EXPECT_EQ(rec.records().back().posterior.cov, second.cov);
+  EXPECT_EQ(rec.records().back().prior.cov, b.cov);
+  rec.predicted(SquareMatrix<ConstantVelocity::dim>::Identity() * 1.5);
+  EXPECT_EQ(rec.record(2.0, b, b).problem, Problem::out_of_order_time);
   EXPECT_EQ(rec.records().size(), 2u);
+  EXPECT_EQ(rec.records().back().posterior.nominal, second.nominal);
 }
 
 TEST(Rts, BlockSparseTransitionEqualsTheDenseProduct) {

@@ -17,17 +17,17 @@
 namespace {
 using ctxfuse::pipelines::gins::AllanAccumulator;
 using ctxfuse::pipelines::gins::StaticAccumulator;
-using ctxfuse::pipelines::gins::VibrationStaticDetector;
+using ctxfuse::models::StaticDetector;
 using ctxfuse::pipelines::gins::static_thresholds_from_rest;
 constexpr double kDegree = std::numbers::pi / 180.0;
 
 // The window is half a second at any IMU rate: round(0.5 s x rate) samples, and a platform at
 // rest is static once it has filled, not before; a turn of 1 deg/s (above the 0.25 deg/s
 // threshold) is never static.
-TEST(VibrationStaticDetector, TheWindowIsSecondsAtAnyRateRegularOrJittered) {
+TEST(StaticDetector, TheWindowIsSecondsAtAnyRateRegularOrJittered) {
   const double g = 0.25 * std::numbers::pi / 180.0;
   for (double hz : {50.0, 100.0, 150.0, 400.0}) {
-    VibrationStaticDetector rest(0.5, g, 0.25), turn(0.5, g, 0.25);
+    StaticDetector rest(0.5, g, 0.25), turn(0.5, g, 0.25);
     int first_static = -1;
     for (int i = 0; i < 200; ++i) {
       const double t = 10.0 + i / hz;
@@ -40,7 +40,7 @@ TEST(VibrationStaticDetector, TheWindowIsSecondsAtAnyRateRegularOrJittered) {
   }
   // Steps uniform in [6, 8.5] ms (about 139 Hz): the count from the stamps, 0.5 s of them.
   ctxfuse::sim::Rng rng(7);
-  VibrationStaticDetector j(0.5, g, 0.25);
+  StaticDetector j(0.5, g, 0.25);
   double t = 0.0;
   for (int i = 0; i < 400; ++i, t += rng.uniform(0.006, 0.0085)) j.push(t, Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 0, -9.8));
   EXPECT_NEAR(j.window_samples(), 0.5 / 0.00725, 5.0);
@@ -164,7 +164,7 @@ TEST(StaticThresholds, CalibratedDetectorKeepsRestAndSeesASlowTurn) {
   RestImu imu{0.05 * kDegree, 0.02};
   const auto th = static_thresholds_from_rest(imu.start(1500), 50, 5.0, 1e-3, 0.0038 * kDegree, 70e-6 * 9.80665);
   ASSERT_TRUE(th.has_value());
-  VibrationStaticDetector rest(0.5, 0.25 * kDegree, 0.25), turn(0.5, 0.25 * kDegree, 0.25),
+  StaticDetector rest(0.5, 0.25 * kDegree, 0.25), turn(0.5, 0.25 * kDegree, 0.25),
       fallback(0.5, 0.25 * kDegree, 0.25);
   rest.calibrate(th->gyro, th->accel, th->gyro_bias);
   turn.calibrate(th->gyro, th->accel, th->gyro_bias);

@@ -47,6 +47,11 @@ root="$(fresh_copy sibling)"
 printf '#include "ctxfuse/pipelines/nlos_uwb/run.hpp"\n' >>"$root/include/ctxfuse/pipelines/gins/run.hpp"
 expect 1 "pipelines/gins includes pipelines/nlos_uwb" "$root"
 
+# An inference header that pulls in libsvm (SVM training).
+root="$(fresh_copy libsvm)"
+printf '#include "ctxfuse/classify/svm_train.hpp"\n' >>"$root/include/ctxfuse/pipelines/nlos_uwb/classifier.hpp"
+expect 1 "includes ctxfuse/classify/svm_train.hpp (libsvm) outside a training header" "$root"
+
 # A new folder that is not in the layer table.
 root="$(fresh_copy unknown)"
 mkdir -p "$root/include/ctxfuse/extras"

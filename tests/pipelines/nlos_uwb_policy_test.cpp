@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "ctxfuse/pipelines/nlos_uwb/classifier.hpp"
+#include "ctxfuse/pipelines/nlos_uwb/training.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/policies.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/run.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/smoother.hpp"

@@ -119,6 +119,52 @@ TEST(RegionPipeline, LabelsOfLaterEpochsDoNotChangeEarlierEstimates) {
   EXPECT_TRUE(later_differ);
 }
 
+// Causality of the whole chain the pipeline runs online: receiver epochs -> features -> causal
+// recognition (SVM, the HMM's forward filter, their joint vote) -> region track -> region IMM.
+// Receiver observations changed from time t on (every satellite's C/N0 20 dB lower, every fix
+// 30 m east) leave every estimate before t bit-identical, and change later ones. (The
+// recogniser is trained on this drive's own labels with a small swarm: what it learnt does not
+// matter here, only which epochs each label reads.)
+TEST(RegionPipeline, ReceiverObservationsAfterTDoNotChangeEarlierEstimates) {
+  const Case& c = drive();
+  const ri::LabelledFeatures labelled{c.features, c.true_labels};
+  ri::RecogniserOptions quick;
+  quick.tune.pso.swarm_size = 3;
+  quick.tune.pso.iterations = 2;
+  const ri::Recogniser rec = ri::train_recogniser(labelled, labelled, quick);
+  auto track_of = [&](const messages::SensorLog& log) {
+    const ri::FeatureSeries f = ri::gnss_features(log.sat_epochs);
+    const ri::Recognition r = ri::recognise_causal(rec, f);
+    const ri::RegionTrack regions = ri::region_track(f, r.joint, ri::hmm_posteriors(rec, f));
+    ri::RunOptions o;
+    o.regions = &regions;
+    return ri::run(log, ri::Estimator::region_imm, ri::Settings{}, o).track;
+  };
+  const ri::Track base = track_of(c.log);
+  ASSERT_GT(base.t.size(), 100u);
+  const double t_change = base.t[base.t.size() / 2];
+  messages::SensorLog changed = c.log;
+  for (auto& e : changed.sat_epochs)
+    if (e.t >= t_change)
+      for (auto& sat : e.sats) sat.cn0_dbhz -= 20.0;
+  for (auto& f : changed.gnss)
+    if (f.t >= t_change) f.position.x() += 30.0;
+  const ri::Track other = track_of(changed);
+  ASSERT_EQ(base.t.size(), other.t.size());
+  std::size_t before = 0;
+  bool later_differ = false;
+  for (std::size_t i = 0; i < base.t.size(); ++i) {
+    if (base.t[i] < t_change) {
+      ASSERT_EQ(base.estimate[i], other.estimate[i]) << "t " << base.t[i];
+      ++before;
+    } else {
+      later_differ |= base.estimate[i] != other.estimate[i];
+    }
+  }
+  EXPECT_GT(before, 50u);
+  EXPECT_TRUE(later_differ);
+}
+
 // The region-adaptive matrix counts the transitions between the labels of consecutive epochs
 // from the start on, each once: after epoch k its counts are those of labels 0..k, counted by
 // hand; the start epoch adds no self-transition and the matrix is applied once there.

@@ -205,3 +205,39 @@ TEST(RegionRecogniser, MalformedRecogniserFilesNameTheLineAndField) {
 }
 
 }  // namespace
+
+namespace {
+
+// The causal recognition is, at every epoch, the SVM's label, the argmax of the HMM's forward
+// posterior and the joint vote of those two; changing the features from epoch k on changes
+// no label before k.
+TEST(RegionRecogniser, CausalRecognitionReadsNoLaterEpoch) {
+  const auto a = series(run_of({{0, 30}, {1, 20}, {2, 30}}), 0.0);
+  const auto b = series(run_of({{0, 25}, {1, 25}, {2, 10}}), 0.4);
+  const std::vector<ri::LabelledFeatures> train{a, b};
+  const auto rec = ri::train_recogniser(std::span<const ri::LabelledFeatures>(train), a, quick());
+  const auto test = series(run_of({{0, 20}, {1, 10}, {2, 20}, {1, 10}, {0, 20}}), 1.3).features;
+  const ri::Recognition r = ri::recognise_causal(rec, test);
+  const auto post = ri::hmm_posteriors(rec, test);
+  const auto svm = ri::svm_labels(rec.svm, test);
+  ASSERT_EQ(r.hmm.size(), test.x.size());
+  for (std::size_t i = 0; i < test.x.size(); ++i) {
+    Eigen::Index best = 0;
+    post[i].maxCoeff(&best);
+    EXPECT_EQ(r.hmm[i], static_cast<int>(best)) << i;
+    EXPECT_EQ(r.svm[i], svm[i]) << i;
+    EXPECT_EQ(r.joint[i], rec.vote({svm[i], static_cast<int>(best)})) << i;
+  }
+  auto changed = test;
+  const std::size_t k = 35;
+  for (std::size_t i = k; i < changed.x.size(); ++i) changed.x[i] = ri::Feature(1.0, 10.0);  // indoor from k on
+  const ri::Recognition c = ri::recognise_causal(rec, changed);
+  for (std::size_t i = 0; i < k; ++i) {
+    EXPECT_EQ(c.svm[i], r.svm[i]) << i;
+    EXPECT_EQ(c.hmm[i], r.hmm[i]) << i;
+    EXPECT_EQ(c.joint[i], r.joint[i]) << i;
+  }
+  EXPECT_NE(c.joint.back(), r.joint.back());  // the change itself is seen
+}
+
+}  // namespace

@@ -8,6 +8,8 @@
 
 #include "ctxfuse/filters/ekf.hpp"
 #include "ctxfuse/filters/federated.hpp"
+#include "ctxfuse/filters/release.hpp"
+#include "ctxfuse/models/ins.hpp"
 #include "ctxfuse/models/kinematic.hpp"
 #include "ctxfuse/policies/gating.hpp"
 #include "ctxfuse/policies/health.hpp"
@@ -159,6 +161,88 @@ TEST(FederatedReset, ReplacesTheGlobalAndSharesItOutOrRejectsAndKeepsEverything)
   EXPECT_EQ(f.reset(bad).problem, Problem::non_finite_state);
   EXPECT_EQ(f.global().mean, g.mean);
   EXPECT_EQ(f.global().cov, g.cov);
+}
+
+// variance_to_gate against its closed form in one dimension: y^2 / (S0 + a) = limit gives
+// a = y^2 / limit - S0.
+TEST(VarianceToGate, OneDimensionMatchesTheClosedForm) {
+  const double limit = ChiSquareGate(0.999).threshold(1);
+  for (double y : {4.0, 10.0, 250.0}) {
+    const double a = policies::variance_to_gate<1>(Vector<1>(y), SquareMatrix<1>(0.7), SquareMatrix<1>(1.0), limit);
+    const double expected = y * y / limit - 0.7;
+    EXPECT_NEAR(a, expected, 1e-9 * expected) << "y " << y;
+  }
+  // Inside the gate: nothing to add.
+  EXPECT_EQ(policies::variance_to_gate<1>(Vector<1>(1.0), SquareMatrix<1>(0.7), SquareMatrix<1>(1.0), limit), 0.0);
+  EXPECT_TRUE(std::isnan(policies::variance_to_gate<1>(Vector<1>(std::nan("")), SquareMatrix<1>(0.7), SquareMatrix<1>(1.0), limit)));
+}
+
+// In three dimensions with a correlated S0 and a block Jacobian that is not the identity: the
+// widened innovation lies on the boundary (from the inside, within the bisection's width).
+TEST(VarianceToGate, ThreeDimensionsPutTheInnovationOnTheBoundary) {
+  const double limit = ChiSquareGate(0.999).threshold(3);
+  SquareMatrix<3> A;
+  A << 1.0, 0.3, -0.2, 0.0, 0.8, 0.4, 0.1, 0.0, 1.5;
+  const SquareMatrix<3> S0 = A * A.transpose() + 0.05 * SquareMatrix<3>::Identity();
+  SquareMatrix<3> Hb;
+  Hb << 1.0, 0.0, 0.2, 0.1, 1.0, 0.0, 0.0, -0.3, 1.0;
+  const SquareMatrix<3> dS = Hb * Hb.transpose();
+  const Vector<3> y(12.0, -7.0, 3.0);
+  const double a = policies::variance_to_gate<3>(y, S0, dS, limit);
+  const double nis = y.dot((S0 + a * dS).inverse() * y);
+  EXPECT_GT(a, 0.0);
+  EXPECT_LE(nis, limit);
+  EXPECT_NEAR(nis, limit, 1e-9 * limit);
+}
+
+// eskf::release against the update of a covariance widened by hand by the same amount, and
+// update_or_release's bookkeeping: three refused in a row, the fourth released.
+TEST(EskfRelease, WidensThePositionBlockToTheGateAndUpdates) {
+  const models::Ins15Model m;
+  models::GnssPosition<> gnss;
+  gnss.lever_arm = {0.5, -0.2, 1.1};
+  gnss.R = SquareMatrix<3>::Identity() * 0.04;
+  eskf::Belief<models::Ins15Model> b;
+  b.nominal.p = {1.0, 2.0, 3.0};
+  b.cov = SquareMatrix<15>::Identity() * 0.01;
+  b.cov(0, 6) = b.cov(6, 0) = 0.002;  // position correlated with attitude
+  const Vector<3> z(31.0, -18.0, 3.5);  // 36 m off a filter that believes 0.1 m
+  const ChiSquareGate gate(0.999);
+
+  eskf::Belief<models::Ins15Model> gated = b;
+  EXPECT_EQ(eskf::update(m, gnss, gated, z, gate).outcome, Outcome::gated);
+
+  // By hand: H, y, S0, the amount, the widened update without a gate.
+  Matrix<3, 15> H = Matrix<3, 15>::Zero();
+  H.leftCols<3>().setIdentity();
+  H.middleCols<3>(6) = -b.nominal.q.toRotationMatrix() * so3::skew(gnss.lever_arm);
+  const Vector<3> y = z - (b.nominal.p + b.nominal.q.toRotationMatrix() * gnss.lever_arm);
+  const SquareMatrix<3> S0 = H * b.cov * H.transpose() + gnss.R;
+  const double a = policies::variance_to_gate<3>(y, S0, SquareMatrix<3>::Identity(), gate.threshold(3));
+  eskf::Belief<models::Ins15Model> by_hand = b;
+  by_hand.cov.topLeftCorner<3, 3>().diagonal().array() += a;
+  ASSERT_TRUE(eskf::update(m, gnss, by_hand, z).accepted());
+
+  eskf::Belief<models::Ins15Model> released = b;
+  ASSERT_TRUE(eskf::release<"p">(m, gnss, released, z, gate).accepted());
+  EXPECT_EQ(released.nominal.p, by_hand.nominal.p);
+  EXPECT_EQ(released.cov, by_hand.cov);
+  // The released fix is exactly on the boundary of the widened prior: S0 + a I.
+  EXPECT_NEAR(y.dot((S0 + a * SquareMatrix<3>::Identity()).inverse() * y), gate.threshold(3), 1e-6);
+
+  // Bookkeeping: refused three times (belief untouched), released the fourth time.
+  policies::SourceHealth health(policies::SourceHealthOptions{0.0, 3});
+  eskf::Belief<models::Ins15Model> f = b;
+  bool was_released = true;
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(eskf::update_or_release<"p">(m, gnss, f, z, gate, health, 1.0 * k, &was_released).outcome, Outcome::gated);
+    EXPECT_FALSE(was_released);
+    EXPECT_EQ(f.cov, b.cov);
+  }
+  ASSERT_TRUE(eskf::update_or_release<"p">(m, gnss, f, z, gate, health, 3.0, &was_released).accepted());
+  EXPECT_TRUE(was_released);
+  EXPECT_EQ(f.nominal.p, by_hand.nominal.p);
+  EXPECT_EQ(health.rejections(), 0);
 }
 
 }  // namespace

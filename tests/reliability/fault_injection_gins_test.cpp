@@ -251,7 +251,7 @@ TEST(FaultInjectionGins, CleanRunIsClean) {
 }
 
 // After three fixes gated in a row the pass releases the next one with the position's variance
-// widened just enough to pass the gate (Settings::gate_release_count, ForwardPass::release):
+// widened just enough to pass the gate (Settings::gate_release, eskf::release in filters/release.hpp):
 // a fix 100 m off moves the position, not velocity and attitude, and once the jump is over the
 // next release brings it back. Taken with the gate off, the jump's INS ran away (peak 217 m).
 TEST(FaultInjectionGins, JumpsReleased) {

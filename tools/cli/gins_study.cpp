@@ -5,6 +5,7 @@
 // max, over the whole drive and split into the part with GNSS and the garage (no fix).
 // docs/results.md (section gins_sim) quotes it; every printed number is also in --json.
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <optional>
 #include <ostream>
@@ -42,7 +43,12 @@ int gins_study(Args args, std::ostream& out, std::ostream& err) {
   app.add_option("--speed-scale-sigma", speed_scale_sigma,
                  "prior sigma of the odometer's scale error (default: its data sheet, 0.01); 0: not estimated (15 states)")
       ->check(CLI::NonNegativeNumber);
+  int gate_release = settings.gate_release.min_rejections;
+  app.add_option("--gate-release", gate_release,
+                 "fixes refused in a row after which the next is released (the GNSS/INS pipeline's 3); 0: never")
+      ->check(CLI::NonNegativeNumber);
   if (const auto rc = parse_options(app, args, out, err)) return *rc;
+  settings.gate_release.min_rejections = gate_release > 0 ? gate_release : std::numeric_limits<int>::max();
   std::vector<std::uint64_t> seeds;
   if (!parse_seeds(seeds_text, seeds, err)) return 2;
   if (speed_scale_sigma >= 0.0) settings.speed_scale_sigma = speed_scale_sigma;
@@ -61,7 +67,7 @@ int gins_study(Args args, std::ostream& out, std::ostream& err) {
                      "IMU detector %.2f %%, with the odometer %.2f %% of moving samples; odometer scale error drawn %+.4f\n",
                      static_cast<unsigned long long>(seed), st.imu_samples, st.fixes, 100.0 * st.scene_accuracy,
                      100.0 * st.false_static_share, 100.0 * st.false_static_share_odometer, st.speed_scale_truth);
-    out << "  scheme                              | R                  | RMS     67 %    75 %    max     | RMS GNSS  RMS garage | fixes used/gated | odometer scale (1 sigma)\n";
+    out << "  scheme                              | R                  | RMS     67 %    75 %    max     | RMS GNSS  RMS garage | fixes used/gated/released | odometer scale (1 sigma)\n";
     Json j;
     j["seed"] = static_cast<double>(seed);
     j["scene_accuracy"] = st.scene_accuracy;
@@ -72,9 +78,9 @@ int gins_study(Args args, std::ostream& out, std::ostream& err) {
     j["speed_scale_truth"] = st.speed_scale_truth;
     Json runs = Json::array();
     for (const auto& r : st.runs) {
-      out << formatted("  %-35s | %-18s | %-7.2f %-7.2f %-7.2f %-7.2f | %-9.2f %-10.2f | %-16s | %+.4f (%.4f)\n",
+      out << formatted("  %-35s | %-18s | %-7.2f %-7.2f %-7.2f %-7.2f | %-9.2f %-10.2f | %-25s | %+.4f (%.4f)\n",
                        r.scheme.name.c_str(), r.noise.c_str(), r.all.rms, r.all.p67, r.all.p75, r.all.max, r.with_gnss.rms,
-                       r.indoor.rms, (std::to_string(r.fixes_used) + "/" + std::to_string(r.fixes_gated)).c_str(), r.speed_scale,
+                       r.indoor.rms, (std::to_string(r.fixes_used) + "/" + std::to_string(r.fixes_gated) + "/" + std::to_string(r.fixes_released)).c_str(), r.speed_scale,
                        r.speed_scale_sigma);
       if (r.scheme.smooth && !r.smoothed) out << "    RTS refused (a prior covariance not positive definite): the row above is the forward filter's\n";
       Json rj;

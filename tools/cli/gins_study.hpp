@@ -23,7 +23,7 @@ inline Json gins_errors_json(const ctxfuse::studies::HorizontalErrors& e) {
 }
 
 /// One scheme with one noise policy into `j`: the whole drive, the part with GNSS, the garage,
-/// the fixes used and gated, the forward filter's odometer scale error at the end.
+/// the fixes used, gated and released (of those used), the forward filter's odometer scale error at the end.
 inline void add_gins_run_json(const ctxfuse::studies::GinsSimRun& r, Json& j) {
   if (r.scheme.smooth) j["smoothed"] = r.smoothed;
   j["speed_scale"] = r.speed_scale;
@@ -33,6 +33,7 @@ inline void add_gins_run_json(const ctxfuse::studies::GinsSimRun& r, Json& j) {
   j["indoor"] = gins_errors_json(r.indoor);
   j["fixes_used"] = static_cast<double>(r.fixes_used);
   j["fixes_gated"] = static_cast<double>(r.fixes_gated);
+  j["fixes_released"] = static_cast<double>(r.fixes_released);
 }
 
 }  // namespace ctxfuse::cli

@@ -28,25 +28,10 @@
 
 #include "ctxfuse/classify/svm.hpp"
 #include "ctxfuse/classify/svm_folds.hpp"
+#include "ctxfuse/classify/svm_options.hpp"
 
 namespace ctxfuse::classify {
 
-struct SvmTrainOptions {
-  SvmKernel kernel = SvmKernel::rbf;
-  SvmMulticlass multiclass = SvmMulticlass::one_vs_one;
-  double C = 1.0;
-  double gamma = 0.0;  // <= 0 means 1 / Dim (libsvm's default)
-  bool probability = false;
-  // Fit mean/std per feature on the training data and train in standardised units. Features
-  // with zero spread keep std 1 so that they pass through unchanged.
-  bool standardize = true;
-  // Optional per-label multipliers of C (libsvm's -wi).
-  std::vector<std::pair<int, double>> class_weights;
-  double tolerance = 1e-3;  // libsvm -e
-  double cache_mb = 200.0;
-  bool shrinking = true;
-  std::uint32_t seed = 1;  // srand() before each libsvm call
-};
 
 /// Features as rows of an N x Dim matrix, labels one per row.
 template <int Dim>

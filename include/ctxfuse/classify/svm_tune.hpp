@@ -18,6 +18,7 @@
 
 #include "ctxfuse/classify/pso.hpp"
 #include "ctxfuse/classify/svm_folds.hpp"
+#include "ctxfuse/classify/svm_options.hpp"
 #include "ctxfuse/classify/svm_train.hpp"
 
 namespace ctxfuse::classify {
@@ -99,39 +100,6 @@ SvmCrossValidation cross_validate_svm(const SvmFeatures<Dim>& x, std::span<const
   return cross_validate_svm<Dim, MaxClasses>(x, y, options, stratified_folds(y, folds, seed));
 }
 
-/// What the search reports after the initial swarm (iteration 0) and after each iteration.
-struct SvmTuneProgress {
-  int iteration = 0, iterations = 0;
-  int evaluations = 0;  // cross-validations so far
-  double best_score = 0.0;
-  double C = 1.0, gamma = 0.0;
-  double elapsed_s = 0.0;
-};
-
-struct SvmTuneOptions {
-  // Search box in log2 units, the usual libsvm grid.py range.
-  double log2_c_min = -5.0, log2_c_max = 15.0;
-  double log2_gamma_min = -15.0, log2_gamma_max = 3.0;
-  // Folds: `fold_of_sample` when given (one entry per sample, e.g. block_folds or group_folds),
-  // else stratified `folds`-fold with `fold_seed`.
-  int folds = 5;
-  std::uint64_t fold_seed = 1;
-  std::vector<int> fold_of_sample{};
-  CvScore score = CvScore::accuracy;
-  // > 0: search on every m-th sample, m = ceil(n / max_search_samples) (fold_of_sample thinned
-  // alike); 0: on all samples.
-  std::size_t max_search_samples = 0;
-  PsoOptions pso{.swarm_size = 10, .iterations = 10};
-  std::function<void(const SvmTuneProgress&)> on_progress{};
-};
-
-struct SvmTuneResult {
-  double C = 1.0;
-  double gamma = 0.0;        // 0 for the linear kernel
-  double cv_accuracy = 0.0;  // best cross-validated score found (the score of tune.score)
-  int evaluations = 0;       // cross-validations run
-  std::size_t search_samples = 0;
-};
 
 /// PSO over (log2 C, log2 gamma) (log2 C only for the linear kernel) maximising the chosen
 /// cross-validated score, as the region-recognition paper tunes its SVM. Probability fitting is

@@ -60,6 +60,7 @@ enum class Problem : std::uint8_t {
   // entry point: refused before a single element is read (core/validation.hpp).
   measurement_wrong_size,  // z's rows x cols is not the measurement model's dim x 1
   input_wrong_size,        // u's rows x cols is not the process model's Input
+  input_wrong_kind,        // u is another kind than the model takes (IMU increments where rates are expected)
   // Construction (core/error.hpp): a check function's verdict on a setting.
   invalid_setting,  // a setting outside its range (shares, weights, probabilities, counts)
 };
@@ -98,6 +99,7 @@ constexpr std::string_view describe(Problem p) {
     case Problem::measurement_count_above_capacity: return "more measurements than the epoch's fixed slots";
     case Problem::measurement_wrong_size: return "measurement vector has the wrong size for the measurement model";
     case Problem::input_wrong_size: return "process input has the wrong size for the process model";
+    case Problem::input_wrong_kind: return "process input is another kind than the process model takes";
     case Problem::invalid_setting: return "a setting is outside its range";
     case Problem::too_few_measurements: return "fewer measurements than unknowns";
     case Problem::degenerate_geometry: return "geometry too poor to solve (nearly singular normal equations)";

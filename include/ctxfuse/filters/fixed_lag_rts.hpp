@@ -18,12 +18,9 @@
 // against the textbook equations written plainly). Only means are smoothed: callers of a
 // fixed-lag output want the estimate, and the covariance recursion would double the cost.
 //
-// A state held by construction (zero prior variance, zero process noise) makes Pbar singular;
-// as in filters/rts.hpp the solve puts 1 on its diagonal, which gives it a zero gain and
-// leaves the others as in the reduced problem.
+// The gain, the held states' handling and the rule for a record at the newest one's time are
+// filters/rts_gain.hpp's, shared with the whole-run recorder (filters/rts.hpp).
 #pragma once
-
-#include <Eigen/Cholesky>
 
 #include <algorithm>
 #include <cstddef>
@@ -33,6 +30,7 @@
 #include "ctxfuse/core/numerics.hpp"
 #include "ctxfuse/core/status.hpp"
 #include "ctxfuse/core/types.hpp"
+#include "ctxfuse/filters/rts_gain.hpp"
 
 namespace ctxfuse {
 
@@ -78,27 +76,18 @@ class FixedLagRts {
   Status record(double t, const Gaussian<N>& prior, const Gaussian<N>& posterior) {
     if (size_ == 0) return Status::invalid(Problem::time_not_set);
     Record& last = at(size_ - 1);
-    if (!(t >= last.t)) return Status::invalid(Problem::out_of_order_time);
-    if (t == last.t && phi_.isIdentity(0.0)) {
-      ++revision_;
-      last.mean = posterior.mean;
-      last_cov_ = posterior.cov;
-      return Status{};
+    switch (rts_record_kind<N>(t, last.t, phi_)) {
+      case RtsRecordKind::out_of_order: return Status::invalid(Problem::out_of_order_time);
+      case RtsRecordKind::joins_newest:
+        ++revision_;
+        last.mean = posterior.mean;
+        last_cov_ = posterior.cov;
+        return Status{};
+      case RtsRecordKind::next: break;
     }
-    SquareMatrix<N> pbar = prior.cov;
-    for (int j = 0; j < N; ++j)
-      if (pbar(j, j) == 0.0 && pbar.row(j).isZero(0.0)) pbar(j, j) = 1.0;  // a held state
-    // (A zero variance with a non-zero row is not positive semi-definite: the LLT fails.)
-    const Eigen::LLT<SquareMatrix<N>> llt(pbar);
-    if (llt.info() != Eigen::Success) {
+    if (const Status g = rts_gain<N>(last_cov_, phi_, prior.cov, last.gain); !g.accepted()) {
       start(t, posterior);
-      return Status::failure(Problem::covariance_not_positive_definite);
-    }
-    // C' = Pbar^-1 Phi P
-    last.gain = llt.solve(phi_ * last_cov_).transpose();
-    if (!all_finite(last.gain)) {
-      start(t, posterior);
-      return Status::failure(Problem::non_finite_covariance);
+      return g;
     }
     ++revision_;
     push(t, prior.mean, posterior.mean);

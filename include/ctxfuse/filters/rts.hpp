@@ -25,12 +25,10 @@
 // first order in the update's correction; exact for vector states). Epochs without updates
 // (gaps) have prior == posterior and need nothing special.
 //
-// A state held by construction (an augmented block with zero prior variance and zero process
-// noise: a lever arm given as known, a scale factor not estimated) has exact zero rows and
-// columns in every covariance, so Pbar is singular. Such a state is decoupled from the others
-// (Pbar_jj = 0 forces (Phi P)_j = 0 for a positive semi-definite P), and the RTS solution of
-// the others is the one without it; the solve puts 1 on its diagonal, which gives it a zero
-// gain and leaves every other gain as in the reduced problem.
+// The gain and the handling of states held by construction (zero prior variance and process
+// noise) are filters/rts_gain.hpp's, shared with the fixed-lag ring (filters/fixed_lag_rts.hpp),
+// and so is the rule for a record at the newest one's time: a second update there with no
+// prediction since joins it.
 #pragma once
 
 #include <Eigen/Cholesky>
@@ -43,6 +41,7 @@
 #include "ctxfuse/core/gaussian.hpp"
 #include "ctxfuse/core/numerics.hpp"
 #include "ctxfuse/core/status.hpp"
+#include "ctxfuse/filters/rts_gain.hpp"
 
 namespace ctxfuse {
 
@@ -96,11 +95,16 @@ class RtsRecorder {
     phi_ = phi_next_;
   }
 
-  /// Closes an epoch. Refused (nothing stored) before start() or when the stamp does not
-  /// advance.
+  /// Closes an epoch. At the newest epoch's time with no prediction since, the update joins
+  /// that epoch (its posterior replaced, its prior kept; records().size() does not grow).
+  /// Refused (nothing stored) before start() and for any other stamp that does not advance.
   Status record(double t, const Belief& prior, const Belief& posterior) {
     if (records_.empty()) return Status::invalid(Problem::time_not_set);
-    if (!(t > records_.back().t)) return Status::invalid(Problem::out_of_order_time);
+    switch (rts_record_kind<N>(t, records_.back().t, phi_)) {
+      case RtsRecordKind::out_of_order: return Status::invalid(Problem::out_of_order_time);
+      case RtsRecordKind::joins_newest: records_.back().posterior = posterior; return Status{};
+      case RtsRecordKind::next: break;
+    }
     records_.push_back(Record{t, prior, posterior, phi_});
     phi_.setIdentity();
     return Status{};
@@ -123,19 +127,8 @@ class RtsRecorder {
         xs_next = r.posterior.nominal;
         continue;
       }
-      const SquareMatrix<N>* pbar = &n.prior.cov;
-      SquareMatrix<N> without_held;
-      for (int j = 0; j < N; ++j) {
-        if (n.prior.cov(j, j) != 0.0) continue;
-        if (pbar == &n.prior.cov) without_held = n.prior.cov;
-        pbar = &without_held;
-        if (!n.prior.cov.row(j).isZero(0.0)) return Status::failure(Problem::covariance_not_positive_definite);
-        without_held(j, j) = 1.0;
-      }
-      const Eigen::LLT<SquareMatrix<N>> llt(*pbar);
-      if (llt.info() != Eigen::Success) return Status::failure(Problem::covariance_not_positive_definite);
-      // C' = Pbar^-1 Phi P
-      const SquareMatrix<N> C = llt.solve(n.transition * r.posterior.cov).transpose();
+      SquareMatrix<N> C;
+      if (const Status g = rts_gain<N>(r.posterior.cov, n.transition, n.prior.cov, C); !g.accepted()) return g;
       const Vector<N> dx = C * model.difference(xs_next, n.prior.nominal);
       SquareMatrix<N> Ps = r.posterior.cov + C * (Ps_next - n.prior.cov) * C.transpose();
       symmetrize(Ps);

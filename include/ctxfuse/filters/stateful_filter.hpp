@@ -31,13 +31,19 @@ class StatefulFilter {
   void set_time(double t) { clock_.set(t); }
   void reset(const Belief& b) { belief_ = b; }
 
-  Status predict(const Input& u, double dt) { return Steps::predict(model_, belief_, u, dt, options_); }
+  /// Predict by dt. When the filter has a time (set_time, predict_to) an accepted step moves
+  /// it on by dt, so predict and predict_to can be mixed without predicting an interval twice.
+  Status predict(const Input& u, double dt) {
+    const Status s = Steps::predict(model_, belief_, u, dt, options_);
+    if (s && clock_.is_set()) clock_.set(clock_.time() + dt);
+    return s;
+  }
 
   /// Predict from the filter time to `t`; out-of-order or unset time is rejected.
   Status predict_to(double t, const Input& u) {
     double dt = 0.0;
     if (Problem p = clock_.dt_to(t, dt); p != Problem::none) return Status::invalid(p);
-    Status s = predict(u, dt);
+    Status s = Steps::predict(model_, belief_, u, dt, options_);
     if (s) clock_.set(t);
     return s;
   }

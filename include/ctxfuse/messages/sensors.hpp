@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -21,11 +22,16 @@ inline constexpr double kUnknown = std::numeric_limits<double>::quiet_NaN();
 /// One inertial sample in the IMU's own axes. With `increments` false, `gyro` [rad/s] and
 /// `accel` [m/s^2, specific force] are the rates at `t`; with it true they are the angle
 /// [rad] and velocity [m/s] increments over the interval that ends at `t`.
+/// The one IMU sample type of the library: what readers and the simulator deliver, and the
+/// input of the rate-driven INS model (models::Ins15Model, which refuses increments).
 struct ImuSample {
   double t = 0.0;
   Eigen::Vector3d gyro = Eigen::Vector3d::Zero();
   Eigen::Vector3d accel = Eigen::Vector3d::Zero();
   bool increments = false;
+  bool is_finite() const { return std::isfinite(t) && gyro.allFinite() && accel.allFinite(); }
+  /// The largest |element| of gyro and accel (the filters' input-magnitude check).
+  double max_abs() const { return std::max(gyro.cwiseAbs().maxCoeff(), accel.cwiseAbs().maxCoeff()); }
 };
 
 enum class PositionFrame : std::uint8_t {

@@ -19,16 +19,13 @@
 #include "ctxfuse/core/so3.hpp"
 #include "ctxfuse/core/status.hpp"
 #include "ctxfuse/core/types.hpp"
+#include "ctxfuse/messages/sensors.hpp"
 
 namespace ctxfuse::models {
 
-/// One IMU sample: angular rate [rad/s] and specific force [m/s^2], both in the body frame.
-struct ImuSample {
-  Eigen::Vector3d gyro = Eigen::Vector3d::Zero();
-  Eigen::Vector3d accel = Eigen::Vector3d::Zero();
-  bool is_finite() const { return all_finite(gyro) && all_finite(accel); }
-  double max_abs() const { return std::max(gyro.cwiseAbs().maxCoeff(), accel.cwiseAbs().maxCoeff()); }
-};
+/// The IMU sample (messages/sensors.hpp): angular rate [rad/s] and specific force [m/s^2], both
+/// in the body frame; its stamp is not read (the step's dt is), increments are refused.
+using ImuSample = messages::ImuSample;
 
 struct InsState {
   Eigen::Vector3d p = Eigen::Vector3d::Zero();
@@ -107,6 +104,7 @@ struct Ins15Model {
   double max_accel = 400.0;  // [m/s^2] (~40 g)
 
   Problem check_input(const ImuSample& u) const {
+    if (u.increments) return Problem::input_wrong_kind;
     if (u.gyro.cwiseAbs().maxCoeff() > max_gyro || u.accel.cwiseAbs().maxCoeff() > max_accel)
       return Problem::input_magnitude;
     return Problem::none;

@@ -4,8 +4,12 @@
 // state machines with fixed storage: nothing allocates per sample.
 #pragma once
 
+#include <Eigen/Core>
+
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <optional>
 
 #include "ctxfuse/core/block_state.hpp"
@@ -14,44 +18,80 @@
 
 namespace ctxfuse::models {
 
-struct StaticDetectorOptions {
-  int window = 50;                 // samples (upstream ZUPT window for the drive: 50 epochs)
-  double accel_threshold = 0.25;   // [m/s^2] largest |f| - mean |f| over the window
-  double gyro_threshold = 0.00436; // [rad/s] (0.25 deg/s) largest |w| over the window
-};
-
-/// Static when, over the last `window` raw samples, the specific-force magnitude stays within
-/// accel_threshold of its window mean and the angular rate magnitude below gyro_threshold.
-/// `entered_static()` is true on the one sample where a static period starts (ZIHR stores
-/// the heading then).
+/// Static detection from the raw IMU, for any platform and rate. A parked car with its engine
+/// running vibrates its IMU by degrees per second (the real drive's static start: 0.7 / 2.6 /
+/// 0.06 deg/s std on the three gyro axes at 100 Hz), so a test on the largest raw rate never
+/// fires; vibration averages out over a window while turning does not. Static: over the samples
+/// of the last window_s seconds the mean angular-rate vector (less a calibrated bias) is below
+/// gyro_threshold and the std of the specific-force magnitude below accel_threshold, and -- when
+/// the caller has an attitude -- the mean horizontal acceleration in the navigation frame
+/// (C f + g) is below accel_threshold too: braking steadily in a straight line leaves the rates
+/// and |f| as still as a stop (|f| changes by 0.2 m/s^2 at 2 m/s^2), the levelled acceleration
+/// does not. The window is given in seconds and held as the number of samples the IMU's own
+/// rate puts in it, so it means the same at 50 or 400 Hz. The defaults are upstream's ZUPT
+/// figures (0.5 s, 0.25 deg/s, 0.25 m/s^2); pipelines/gins/static_start.hpp sets calibrated
+/// ones from a recording's static start. `entered_static()` is true on the one sample where a
+/// static period starts (ZIHR stores the heading then). Fixed storage: nothing allocates.
 class StaticDetector {
  public:
-  static constexpr int kCapacity = 512;
-  StaticDetector() = default;
-  explicit StaticDetector(StaticDetectorOptions o) : options_(o) {
-    if (options_.window < 2) options_.window = 2;
-    if (options_.window > kCapacity) options_.window = kCapacity;
+  static constexpr int kCapacity = 512;  // samples in a window: 1.28 s at 400 Hz
+  /// gyro_threshold on the window's mean rate (less the bias given by calibrate), accel_threshold
+  /// on the window's std of |f| (until calibrate) and on its mean horizontal acceleration.
+  explicit StaticDetector(double window_s = 0.5, double gyro_threshold = 0.25 * 3.14159265358979323846 / 180.0,
+                          double accel_threshold = 0.25)
+      : window_s_(window_s),
+        gyro_threshold_(gyro_threshold),
+        accel_threshold_(accel_threshold),
+        horizontal_threshold_(accel_threshold) {}
+
+  /// New thresholds and the rate bias to take off the window's mean rate (from the static
+  /// start, static_thresholds_from_rest); the window's samples are kept.
+  void calibrate(double gyro_threshold, double accel_threshold, const Eigen::Vector3d& gyro_bias) {
+    gyro_threshold_ = gyro_threshold;
+    accel_threshold_ = accel_threshold;
+    gyro_bias_ = gyro_bias;
   }
 
-  /// One raw sample (rates, any axes: only magnitudes are used). Non-finite samples are ignored.
-  bool push(const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel) {
+  /// One raw sample at time t (rates in any axes) and the horizontal acceleration in the
+  /// navigation frame (zero while there is no attitude). Returns whether the window is static
+  /// now. The window is window_s seconds of samples: its count, round(window_s x rate), is fixed
+  /// from the rate of the samples so far once that many have come, so that a window of jittered
+  /// stamps keeps one length. A non-finite sample, or one not after
+  /// the previous, is ignored.
+  bool push(double t, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel,
+            const Eigen::Vector2d& horizontal = Eigen::Vector2d::Zero()) {
     entered_ = false;
-    if (!all_finite(gyro) || !all_finite(accel)) return static_;
-    accel_norm_[next_] = accel.norm();
-    gyro_norm_[next_] = gyro.norm();
-    next_ = (next_ + 1) % options_.window;
-    if (count_ < options_.window) ++count_;
-    bool now = false;
-    if (count_ == options_.window) {
-      double mean = 0.0, max_gyro = 0.0;
-      for (int i = 0; i < count_; ++i) {
-        mean += accel_norm_[i];
-        max_gyro = std::max(max_gyro, gyro_norm_[i]);
+    if (!std::isfinite(t) || !gyro.allFinite() || !accel.allFinite() || !horizontal.allFinite()) return static_;
+    if (seen_ > 0 && !(t > last_t_)) return static_;
+    if (seen_ == 0) first_t_ = t;
+    last_t_ = t;
+    ++seen_;
+    if (window_ == 0 && seen_ >= 2) {
+      // The window's count from the rate so far, fixed once the samples seen fill it.
+      const double rate = static_cast<double>(seen_ - 1) / (t - first_t_);
+      const double n = std::clamp(std::round(window_s_ * rate), 2.0, static_cast<double>(kCapacity));
+      if (static_cast<double>(seen_) >= n) {
+        window_ = static_cast<int>(n);
+        while (count_ >= window_) drop_oldest();  // the new sample comes in below
       }
-      mean /= count_;
-      double max_dev = 0.0;
-      for (int i = 0; i < count_; ++i) max_dev = std::max(max_dev, std::abs(accel_norm_[i] - mean));
-      now = max_dev < options_.accel_threshold && max_gyro < options_.gyro_threshold;
+    }
+    const int capacity = window_ > 0 ? window_ : kCapacity;
+    if (count_ == capacity) drop_oldest();
+    const std::size_t i = static_cast<std::size_t>((first_ + count_) % kCapacity);
+    gyro_[i] = gyro;
+    h_[i] = horizontal;
+    f_[i] = accel.norm();
+    sum_gyro_ += gyro;
+    sum_h_ += horizontal;
+    sum_f_ += f_[i];
+    sum_f2_ += f_[i] * f_[i];
+    ++count_;
+    bool now = false;
+    if (window_ > 0 && count_ == window_) {
+      const double n = window_;
+      const double var = std::max(0.0, sum_f2_ / n - (sum_f_ / n) * (sum_f_ / n));
+      now = (sum_gyro_ / n - gyro_bias_).norm() < gyro_threshold_ && std::sqrt(var) < accel_threshold_ &&
+            (sum_h_ / n).norm() < horizontal_threshold_;
     }
     entered_ = now && !static_;
     static_ = now;
@@ -59,16 +99,32 @@ class StaticDetector {
   }
   bool is_static() const { return static_; }
   bool entered_static() const { return entered_; }
-  const StaticDetectorOptions& options() const { return options_; }
+  /// Samples in the window (0 until the first window has filled).
+  int window_samples() const { return window_; }
 
  private:
-  StaticDetectorOptions options_{};
-  std::array<double, kCapacity> accel_norm_{};
-  std::array<double, kCapacity> gyro_norm_{};
-  int next_ = 0;
-  int count_ = 0;
-  bool static_ = false;
-  bool entered_ = false;
+  void drop_oldest() {
+    const std::size_t i = static_cast<std::size_t>(first_);
+    sum_gyro_ -= gyro_[i];
+    sum_h_ -= h_[i];
+    sum_f_ -= f_[i];
+    sum_f2_ -= f_[i] * f_[i];
+    first_ = (first_ + 1) % kCapacity;
+    --count_;
+  }
+  double window_s_;
+  double gyro_threshold_, accel_threshold_, horizontal_threshold_;
+  Eigen::Vector3d gyro_bias_ = Eigen::Vector3d::Zero();
+  std::array<Eigen::Vector3d, kCapacity> gyro_{};
+  std::array<Eigen::Vector2d, kCapacity> h_{};
+  std::array<double, kCapacity> f_{};
+  Eigen::Vector3d sum_gyro_ = Eigen::Vector3d::Zero();
+  Eigen::Vector2d sum_h_ = Eigen::Vector2d::Zero();
+  double sum_f_ = 0.0, sum_f2_ = 0.0;
+  double first_t_ = 0.0, last_t_ = 0.0;
+  std::size_t seen_ = 0;
+  int window_ = 0, first_ = 0, count_ = 0;
+  bool static_ = false, entered_ = false;
 };
 
 /// Magnetic heading [rad] of a field measured in body axes, levelled with the attitude's roll

@@ -4,7 +4,8 @@
 // alone, federated Kalman filter, plain IMM). It runs on sensor streams (messages::SensorLog), from a
 // recording or the simulator alike, and never reads truth:
 //   region_imm/settings.hpp    the one set of settings, the estimators, recognised regions
-//   region_imm/recogniser.hpp  features, training from labelled logs, recognition
+//   region_imm/recogniser.hpp  features, recognition (no libsvm)
+//   region_imm/training.hpp    training the recogniser from labelled logs (libsvm)
 //   region_imm/alignment.hpp   how the filters start (dynamic alignment from fixes)
 //   region_imm/models.hpp      measurement models, lock-out recovery, integrity monitor
 //   region_imm/aided.hpp       the aided-filter wrapper every IMU-driven estimator runs in
@@ -16,5 +17,6 @@
 
 #include "ctxfuse/pipelines/region_imm/alignment.hpp"
 #include "ctxfuse/pipelines/region_imm/recogniser.hpp"
+#include "ctxfuse/pipelines/region_imm/training.hpp"
 #include "ctxfuse/pipelines/region_imm/run.hpp"
 #include "ctxfuse/pipelines/region_imm/settings.hpp"

@@ -12,10 +12,17 @@
 // measurement is judged against an honest uncertainty.
 //
 // `SourceHealth` is the bookkeeping (what PX4 calls the innovation-check-fail timer) for one
-// source in one filter; `widen_blocks` is the recovery, on a covariance laid out by block names.
+// source in one filter. The recovery widens the covariance of a named block, by one of two
+// amounts: a fixed sigma (`widen_block`), or just enough that the refused innovation lies on
+// the gate's boundary (`variance_to_gate`; filters/release.hpp applies it and updates). Every
+// pipeline's lock-out goes through this header: the GNSS/INS pass and its simulation study
+// release by `variance_to_gate` after a count of refusals in a row (timeout 0), the region
+// IMM and the NLOS UWB run widen by a fixed sigma after a timeout.
 #pragma once
 
 #include <limits>
+
+#include <Eigen/Cholesky>
 
 #include "ctxfuse/core/layout.hpp"
 #include "ctxfuse/core/status.hpp"
@@ -75,6 +82,30 @@ template <class ErrorLayout, FixedString Name, int N>
 void widen_block(SquareMatrix<N>& P, double sigma) {
   static_assert(ErrorLayout::size == N, "covariance of another layout");
   ErrorLayout::template cov<Name>(P).diagonal().array() += sigma * sigma;
+}
+
+/// The variance a >= 0 to add to each axis of one block of the covariance so that the
+/// innovation y lies on the gate's boundary: y' (S0 + a dS)^-1 y = limit, where S0 is the
+/// innovation covariance and dS = Hb Hb' the derivative of S with respect to a (Hb: the
+/// measurement Jacobian's columns of the block). 0 when y already lies inside the gate. The
+/// NIS falls monotonically with a: the root is bracketed (a from 1e-4, times 4, at most 1e12)
+/// and bisected 40 times; the upper end is returned, so the widened innovation is never
+/// outside the gate. NaN when y, S0 or dS is not finite.
+template <int M>
+double variance_to_gate(const Vector<M>& y, const SquareMatrix<M>& S0, const SquareMatrix<M>& dS, double limit) {
+  if (!y.allFinite() || !S0.allFinite() || !dS.allFinite()) return std::numeric_limits<double>::quiet_NaN();
+  auto nis = [&](double added) {
+    const SquareMatrix<M> S = S0 + added * dS;
+    return y.dot(S.ldlt().solve(y));
+  };
+  if (!(nis(0.0) > limit)) return 0.0;
+  double lo = 0.0, hi = 1e-4;
+  while (nis(hi) > limit && hi < 1e12) lo = hi, hi *= 4.0;
+  for (int i = 0; i < 40; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (nis(mid) > limit ? lo : hi) = mid;
+  }
+  return hi;
 }
 
 }  // namespace ctxfuse::policies

@@ -11,6 +11,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "ctxfuse/messages/sensors.hpp"
+
 namespace ctxfuse::sim {
 
 /// Region labels of the region-recognition paper (A), zero-based.
@@ -51,11 +53,8 @@ struct TruthSample {
   bool is_static = false;                               // vehicle exactly at rest
 };
 
-struct ImuSample {
-  double t = 0.0;
-  Eigen::Vector3d gyro = Eigen::Vector3d::Zero();   // body FLU, rad/s
-  Eigen::Vector3d accel = Eigen::Vector3d::Zero();  // body FLU specific force, m/s^2
-};
+/// The simulated IMU's samples: rates in body FLU (gyro [rad/s], accel specific force [m/s^2]).
+using ImuSample = messages::ImuSample;
 
 /// The IMU's true errors: measured = (1 + scale) * true + bias + white noise, per axis.
 struct ImuErrorTruth {

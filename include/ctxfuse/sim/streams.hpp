@@ -36,8 +36,6 @@ inline messages::GnssFix gnss_fix(const GnssEpoch& e) {
   return f;
 }
 
-inline messages::ImuSample imu_sample(const ImuSample& s) { return {s.t, s.gyro, s.accel, false}; }
-
 inline messages::UwbRange uwb_range(const UwbRange& r) {
   return {r.t, r.anchor_id, r.anchor_position, r.range_m, r.rssi_dbm, r.rssi_first_path_dbm};
 }
@@ -45,8 +43,7 @@ inline messages::UwbRange uwb_range(const UwbRange& r) {
 /// Every sensor stream of the drive, without truth.
 inline messages::SensorLog sensor_log(const Drive& d) {
   messages::SensorLog log;
-  log.imu.reserve(d.imu.size());
-  for (const auto& s : d.imu) log.imu.push_back(imu_sample(s));
+  log.imu = d.imu;  // the simulator's samples are the messages (sim/records.hpp)
   for (const auto& e : d.gnss) {
     log.sat_epochs.push_back(sat_epoch(d, e));
     if (e.has_fix) log.gnss.push_back(gnss_fix(e));

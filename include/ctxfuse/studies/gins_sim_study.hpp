@@ -10,11 +10,13 @@
 // estimate) augmented with the odometer's scale error (block "speed_scale", a constant with the
 // odometer's data-sheet sigma; without it the wheel-radius error is an along-track drift in the
 // garage that the covariance does not know), GNSS position at 1 Hz with a one-tailed
-// chi-square gate, ZUPT + NHC with the odometer's forward speed (and optionally ZIHR) at 10 Hz,
+// chi-square gate and the GNSS/INS pipeline's lock-out release (filters/release.hpp: after
+// three fixes in a row refused, the next is released with the position's variance widened to
+// the gate's boundary), ZUPT + NHC with the odometer's forward speed (and optionally ZIHR) at 10 Hz,
 // RTS over 10 Hz records.
 //
-// Static or moving: the raw-IMU detector (models::StaticDetector, the paper's cue) and the
-// odometer together (OdometerStaticDecision). The simulator has no engine or road vibration,
+// Static or moving: the raw-IMU detector (models::StaticDetector with the GNSS/INS
+// pipeline's fallback window and thresholds, the paper's cue) and the odometer together (OdometerStaticDecision). The simulator has no engine or road vibration,
 // so at constant speed on a straight road the IMU alone reads as static (83 % of the moving
 // samples on seed 1, `false_static_share`); ZUPT there drags a moving car to zero speed. A
 // wheel that turns says the car moves: static needs the detector and a speed within 3 sigma
@@ -39,11 +41,14 @@
 
 #include "ctxfuse/studies/gins_sim_scene.hpp"
 #include "ctxfuse/filters/eskf.hpp"
+#include "ctxfuse/filters/release.hpp"
 #include "ctxfuse/filters/rts.hpp"
 #include "ctxfuse/models/ins_augment.hpp"
 #include "ctxfuse/models/ins_motion.hpp"
 #include "ctxfuse/models/ins_updates.hpp"
+#include "ctxfuse/pipelines/gins/settings.hpp"
 #include "ctxfuse/policies/gating.hpp"
+#include "ctxfuse/policies/health.hpp"
 
 namespace ctxfuse::studies {
 
@@ -57,6 +62,8 @@ struct GinsSimScheme {
 struct GinsSimSettings {
   double fixed_sigma_m = 2.0;           // fixed R: the open-sky E_0 of eq. 20
   double gate_probability = 0.999;
+  /// The lock-out release of the GNSS/INS pipeline's settings (three refused in a row).
+  policies::SourceHealthOptions gate_release = pipelines::gins::Settings{}.gate_release;
   double zupt_sigma = 0.02;             // [m/s]
   double nhc_sigma = 0.1;               // [m/s] lateral / vertical
   double zihr_sigma = 0.1 * 3.14159265358979323846 / 180.0;
@@ -67,14 +74,16 @@ struct GinsSimSettings {
   std::optional<double> speed_scale_sigma;
 };
 
-/// Static when the raw-IMU detector says so and the odometer's latest speed is within three
-/// of its noise sigmas of zero (no odometer: the detector alone). `entered` is true on the
-/// first static sample of a static period (ZIHR holds the heading from there).
+/// Static when the raw-IMU detector (models::StaticDetector with the GNSS/INS pipeline's
+/// fallback window and thresholds) says so and the odometer's latest speed is within three of
+/// its noise sigmas of zero (no odometer: the detector alone). `entered` is true on the first
+/// static sample of a static period (ZIHR holds the heading from there).
 class OdometerStaticDecision {
  public:
-  explicit OdometerStaticDecision(double speed_sigma) : speed_limit_(3.0 * speed_sigma) {}
-  bool push(const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel, std::optional<double> speed) {
-    imu_static_ = detector_.push(gyro, accel);
+  explicit OdometerStaticDecision(double speed_sigma, const pipelines::gins::Settings& s = {})
+      : detector_(s.static_window_s, s.static_gyro_threshold, s.static_accel_threshold), speed_limit_(3.0 * speed_sigma) {}
+  bool push(double t, const Eigen::Vector3d& gyro, const Eigen::Vector3d& accel, std::optional<double> speed) {
+    imu_static_ = detector_.push(t, gyro, accel);
     const bool now = imu_static_ && (!speed || std::abs(*speed) <= speed_limit_);
     entered_ = now && !static_;
     static_ = now;
@@ -115,7 +124,7 @@ struct GinsSimRun {
   GinsSimScheme scheme;
   std::string noise;  // "fixed", "scene (classifier)", "scene (true)"
   HorizontalErrors all, with_gnss, indoor;  // indoor: the garage, where no fix exists
-  int fixes_used = 0, fixes_gated = 0;
+  int fixes_used = 0, fixes_gated = 0, fixes_released = 0;
   std::size_t rts_bytes = 0;
   bool smoothed = false;  // the RTS pass ran to the first epoch (schemes with smooth)
   double speed_scale = 0.0, speed_scale_sigma = 0.0;  // the forward filter's at the end of the drive
@@ -176,7 +185,7 @@ inline GinsSimDrive gins_sim_drive(const sim::Drive& d) {
     x.get<"theta">() = Eigen::Quaterniond(Eigen::AngleAxisd(3.14159265358979323846 / 2.0 - tr.yaw, Eigen::Vector3d::UnitZ()));
     out.truth.push_back(x);
     out.region.push_back(static_cast<int>(tr.region));
-    const bool st_odometer = decision.push(out.gyro.back(), out.accel.back(), odometer_speed_at(out, s.t, spd));
+    const bool st_odometer = decision.push(s.t, out.gyro.back(), out.accel.back(), odometer_speed_at(out, s.t, spd));
     const bool st = decision.imu_static();
     if (!tr.is_static) {
       ++moving;
@@ -227,6 +236,7 @@ GinsSimRun run_gins_sim(const GinsSimDrive& d, const sim::ImuConfig& imu, const 
       Eigen::Vector3d::Constant(imu.accel_bias_sigma), s.speed_scale_sigma.value_or(d.speed_scale_sigma);
   b.cov = sd.cwiseAbs2().asDiagonal();
   const ChiSquareGate gate(s.gate_probability);
+  policies::SourceHealth gnss_health(s.gate_release);
   OdometerStaticDecision motion(d.speed_noise);
   models::GnssGeodeticPosition<S> gnss;
   models::ZeroVelocity<S> zupt;
@@ -256,15 +266,17 @@ GinsSimRun run_gins_sim(const GinsSimDrive& d, const sim::ImuConfig& imu, const 
     SquareMatrix<GinsSimModel::dim> F;
     if (eskf::predict(model, b, inc, dt, {}, &F).accepted() && scheme.smooth) rec.predicted(F);
     const std::optional<double> speed = odometer_speed_at(d, d.t[k], spd);
-    const bool is_static = motion.push(d.gyro[k], d.accel[k], speed);
+    const bool is_static = motion.push(d.t[k], d.gyro[k], d.accel[k], speed);
     const eskf::Belief<GinsSimModel> prior = b;
     while (fix < d.fix_t.size() && d.fix_t[fix] < d.t[k] - 1e-9) ++fix;
     if (fix < d.fix_t.size() && std::abs(d.fix_t[fix] - d.t[k]) < 1e-6) {
       (void)noise.observe(probabilities[d.fix_epoch[fix]]);  // refused: R stays as it was
       gnss.R = noise.geodetic(d.fix_llh[fix]);
-      const Status st = eskf::update(model, gnss, b, d.fix_llh[fix], gate);
+      bool released = false;
+      const Status st = eskf::update_or_release<"p">(model, gnss, b, d.fix_llh[fix], gate, gnss_health, d.t[k], &released);
       run.fixes_used += st.accepted() ? 1 : 0;
       run.fixes_gated += st.outcome == Outcome::gated ? 1 : 0;
+      run.fixes_released += released ? 1 : 0;
       ++fix;
     }
     const bool tick = k % static_cast<std::size_t>(every) == 0;

@@ -25,6 +25,7 @@
 #include "ctxfuse/studies/hanyang_protocol.hpp"
 #include "ctxfuse/io/hanyang_uwb.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/calibrated_ekf.hpp"
+#include "ctxfuse/pipelines/nlos_uwb/training.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/run.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/smoother.hpp"
 

@@ -195,12 +195,12 @@ inline std::vector<eval::TimedPosition> imu_only_track(const sim::Drive& d, doub
   for (double te : times) {
     if (te < t) continue;
     while (k + 1 < d.imu.size() && d.imu[k + 1].t <= te) {
-      x = ins.predict(x, {d.imu[k].gyro, d.imu[k].accel}, d.imu[k + 1].t - d.imu[k].t, nullptr);
+      x = ins.predict(x, d.imu[k], d.imu[k + 1].t - d.imu[k].t, nullptr);
       ++k;
       t = d.imu[k].t;
     }
     // The remainder to te on the last sample (under one IMU period).
-    const models::InsState xe = te > t ? ins.predict(x, {d.imu[k].gyro, d.imu[k].accel}, te - t, nullptr) : x;
+    const models::InsState xe = te > t ? ins.predict(x, d.imu[k], te - t, nullptr) : x;
     out.push_back({te, xe.p});
   }
   return out;
@@ -279,9 +279,7 @@ inline NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::ui
   add_run(kNlosSimVariants[6], nu::run(rs, nu::RangeSmoother<>(s), nu::PerRangeRule{}, classifier, s));
   add_run(kNlosSimVariants[7], nu::run(rs, nu::RangeEkf<>(s), nu::PaperEpochRule{}, classifier, s));
   add_run(kNlosSimVariants[8], nu::run(rs, nu::RangeEkf<>(s), nu::NoNlosHandling{}, classifier, s));
-  std::vector<messages::ImuSample> imu;
-  imu.reserve(d.imu.size());
-  for (const auto& u : d.imu) imu.push_back(sim::imu_sample(u));
+  const std::vector<messages::ImuSample>& imu = d.imu;
   const nu::ImuFusionSettings sheet = imu_fusion_settings(d.config.imu);
   using ImuGraph = nu::ImuRangeSmoother<10, NoGate>;
   add_run(kNlosSimVariants[9], nu::run(std::span<const messages::ImuSample>(imu), rs, ImuGraph(s, sheet), nu::NoNlosHandling{}, classifier, s));

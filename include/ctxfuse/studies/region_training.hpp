@@ -14,7 +14,7 @@
 
 #include "ctxfuse/eval/truth.hpp"
 #include "ctxfuse/messages/sensors.hpp"
-#include "ctxfuse/pipelines/region_imm/recogniser.hpp"
+#include "ctxfuse/pipelines/region_imm/training.hpp"
 #include "ctxfuse/sim/drive.hpp"
 #include "ctxfuse/sim/streams.hpp"
 

@@ -13,7 +13,7 @@
 // the receiver's velocity or a straight baseline of fixes, once its sigma is small enough).
 // More than Settings::imu_max_unmeasured_s without a measured IMU sample loses it: it re-aligns
 // the same way once the IMU is back (lose, try_align). A GNSS position or velocity the gate
-// refuses three times in a row is released (release).
+// refuses three times in a row is released (filters/release.hpp).
 // An epoch is every time at which a row is wanted or an update happens; its prior and
 // posterior are recorded for the RTS smoother.
 #pragma once
@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "ctxfuse/filters/eskf.hpp"
+#include "ctxfuse/filters/release.hpp"
 #include "ctxfuse/filters/rts.hpp"
 #include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/models/alignment.hpp"
@@ -75,6 +76,7 @@ class ForwardPass {
         gate_(s.gate_probability),
         align_(alignment_options(s)),
         start_acc_(s.static_window_s),
+        gnss_health_(s.gate_release), velocity_health_(s.gate_release),
         speeds_(s.static_max_speed_mps, s.static_gnss_hold_s) {
     thresholds_.gyro = s.static_gyro_threshold;
     thresholds_.accel = s.static_accel_threshold;
@@ -220,10 +222,10 @@ class ForwardPass {
       return;
     }
     gnss_.R = models::geodetic_position_noise(z, cov);
-    // After gate_release_count fixes in a row refused by the gate it is the filter that is
-    // off, not the receiver: the next fix is released into the filter (release; the counts
-    // say so). The fix's velocity below, the same.
-    const Status st = update_or_release<"p">(gnss_, z, gated_in_row_, counts_.gnss_released);
+    // After Settings::gate_release fixes in a row refused by the gate it is the filter that is
+    // off, not the receiver: the next fix is released into the filter (filters/release.hpp; the
+    // counts say so). The fix's velocity below, the same.
+    const Status st = update_or_release<"p">(fix.t, gnss_, z, gnss_health_, counts_.gnss_released);
     if (st.accepted()) {
       ++counts_.gnss_used;
       pending_used_ = 1;
@@ -238,7 +240,7 @@ class ForwardPass {
       speeds_.gnss_velocity(fix.t, v.head<2>());
       gnss_velocity_.gyro = gyro_body_;
       if (gnss_velocity_.R.allFinite())
-        count(update_or_release<"v">(gnss_velocity_, v, velocity_gated_in_row_, counts_.velocity_released),
+        count(update_or_release<"v">(fix.t, gnss_velocity_, v, velocity_health_, counts_.velocity_released),
               counts_.velocity_used, counts_.velocity_gated);
     }
   }
@@ -275,54 +277,21 @@ class ForwardPass {
   void close_epoch() {
     if (!open_) return;
     open_ = false;
-    if (rts_.record(open_t_, prior_, belief_).accepted()) used_.push_back(pending_used_);
+    const std::size_t before = rts_.records().size();
+    if (rts_.record(open_t_, prior_, belief_).accepted()) {
+      if (rts_.records().size() > before) used_.push_back(pending_used_);
+      else if (!used_.empty()) used_.back() = static_cast<char>(used_.back() | pending_used_);  // joined the newest epoch
+    }
     pending_used_ = 0;
   }
-  /// A GNSS position or velocity through the gate, or released: after gate_release_count
-  /// in a row refused by the gate, the next one is released (release).
+  /// A GNSS position or velocity through the gate, or released once its health declares a
+  /// lock-out (filters/release.hpp).
   template <FixedString Name, class Meas>
-  Status update_or_release(const Meas& meas, const Vector<3>& z, int& gated_in_row, std::size_t& released) {
-    const bool release_now = gated_in_row >= s_.gate_release_count;
-    const Status st = release_now ? release<Name>(meas, z) : eskf::update(model_, meas, belief_, z, gate_);
-    gated_in_row = st.outcome == Outcome::gated ? gated_in_row + 1 : 0;
-    released += release_now && st.accepted() ? 1 : 0;
-    return st;
-  }
-  /// A released measurement of block Name (position or velocity): that block's variance is
-  /// widened, by the same amount on each axis, just enough that the innovation lies on the
-  /// gate's boundary, and the measurement then updates the filter as usual. An update of the
-  /// unwidened covariance with the gate off takes a fix 100 m off (a jump) at the confidence of
-  /// a converged filter and drags velocity and attitude through their correlations with the
-  /// position (the INS ran away to 217 m). A position reset (PX4 EKF2's), which drops those
-  /// correlations, recovers from the jump too, but after a real outage it is through them that
-  /// a late fix corrects the heading (docs/reliability.md, "The NLOS UWB and GNSS/INS
-  /// pipelines"). The velocity is released by the same rule: a filter whose velocity is off
-  /// by more than its covariance admits refuses every GNSS velocity, and the position's release
-  /// alone brings it back only slowly (GinsPipeline.GnssPositionAndVelocityAreReleasedAfterAnImuFault).
-  template <FixedString Name, class Meas>
-  Status release(const Meas& meas, const Vector<3>& z) {
-    using L = typename S::ErrorLayout;
-    constexpr int o = L::template offset<Name>();
-    Matrix<3, Model::dim> H;
-    const Eigen::Vector3d y = ctxfuse::detail::innovation(meas, z, meas.predict(belief_.nominal, &H));
-    const Eigen::Matrix3d S0 = H * belief_.cov * H.transpose() + meas.noise(belief_.nominal);
-    if (!y.allFinite() || !S0.allFinite()) return Status::invalid(Problem::non_finite_prediction);
-    const Eigen::Matrix3d Hb = H.template middleCols<3>(o);
-    const Eigen::Matrix3d dS = Hb * Hb.transpose();  // dS / d(the variance added to each axis)
-    const double limit = gate_.threshold(3);
-    auto nis = [&](double added) { return y.dot((S0 + added * dS).ldlt().solve(y)); };
-    if (!(nis(0.0) > limit)) return eskf::update(model_, meas, belief_, z);
-    // NIS falls monotonically with the added variance: bracket, then bisect.
-    double lo = 0.0, hi = 1e-4;
-    while (nis(hi) > limit && hi < 1e12) lo = hi, hi *= 4.0;
-    for (int i = 0; i < 40; ++i) {
-      const double mid = 0.5 * (lo + hi);
-      (nis(mid) > limit ? lo : hi) = mid;
-    }
-    B widened = belief_;
-    widened.cov.template block<3, 3>(o, o).diagonal().array() += hi;
-    const Status st = eskf::update(model_, meas, widened, z);
-    if (st.accepted()) belief_ = widened;
+  Status update_or_release(double t, const Meas& meas, const Vector<3>& z, policies::SourceHealth& health,
+                           std::size_t& released) {
+    bool was_released = false;
+    const Status st = eskf::update_or_release<Name>(model_, meas, belief_, z, gate_, health, t, &was_released);
+    released += was_released ? 1 : 0;
     return st;
   }
   template <class Meas, int M>
@@ -351,7 +320,8 @@ class ForwardPass {
     align_empty_ = true;
     held_heading_.reset();
     mag_ = models::MagRelativeHeading{};  // its reference attitude is the lost one
-    gated_in_row_ = velocity_gated_in_row_ = 0;
+    gnss_health_.recovered();
+    velocity_health_.recovered();
     ++counts_.imu_losses;
   }
 
@@ -407,7 +377,7 @@ class ForwardPass {
   Constraints c_;
   std::vector<OutageWindow> windows_;
   Decimator decimator_;
-  VibrationStaticDetector detector_;
+  models::StaticDetector detector_;
   ChiSquareGate gate_;
   Model model_{};
   models::ImuInput imu_;
@@ -437,7 +407,7 @@ class ForwardPass {
   std::function<void(double)> progress_;
   double t_first_ = 0.0, t_span_ = 1.0;
   int since_progress_ = 0;
-  int gated_in_row_ = 0, velocity_gated_in_row_ = 0;
+  policies::SourceHealth gnss_health_, velocity_health_;
   // IMU gaps (propagate, lose): the sample in force, how long it has been, the unmeasured time
   // in a row.
   double sample_t_ = NAN, sample_elapsed_ = 0.0, unmeasured_ = 0.0;

@@ -10,6 +10,7 @@
 #include <numbers>
 
 #include "ctxfuse/messages/sensors.hpp"
+#include "ctxfuse/policies/health.hpp"
 
 namespace ctxfuse::pipelines::gins {
 
@@ -124,9 +125,10 @@ struct Settings {
   // Textbook one-tailed test at 99.9 %: a fix outside it is refused, not forced in.
   double gate_probability = 0.999;
   // Three fixes in a row outside the gate (3 s at 1 Hz) cannot all be receiver faults at
-  // 1 - 0.999 each: the next one is released into the filter (ForwardPass::release). The
-  // fixes' positions and velocities count their refusals separately.
-  int gate_release_count = 3;
+  // 1 - 0.999 each: the next one is released into the filter (policies/health.hpp's lock-out,
+  // here with no timeout; filters/release.hpp). The fixes' positions and velocities count
+  // their refusals separately.
+  policies::SourceHealthOptions gate_release{0.0, 3};
 
   // --- Constraints ------------------------------------------------------------------------
   // Applied every constraint_interval_s (10 Hz: the car's suspension and steering change the

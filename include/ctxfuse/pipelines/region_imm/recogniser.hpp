@@ -2,10 +2,17 @@
 // tracked satellites, mean C/N0) -> PSO-SVM + HMM + joint vote -> recognised region per epoch.
 // Features come from the receiver's epochs (messages::SatEpoch) only; the labels that train and
 // validate the classifiers are the caller's (from a labelled log's truth: eval/truth.hpp).
+// Training (PSO-SVM through libsvm, the HMM's fit) is in region_imm/training.hpp: this header,
+// the inference side, does not need libsvm.
 //
-// recognise() runs the SVM per epoch and the HMM's Viterbi path over the whole log (what the
-// paper reports, and what an offline replay of a recording can do); hmm_posteriors() is the
-// causal forward filter, what an online system knows at each epoch.
+// recognise_causal() is what an online system has: at each epoch the SVM's label, the argmax of
+// the HMM's forward filter (p(region | features up to that epoch), hmm_posteriors()) and the
+// joint vote of the two, so a label never depends on a later epoch. recognise() runs the SVM
+// per epoch and the HMM's Viterbi path over the whole log: what the paper reports as its
+// recognition accuracy, which an offline replay can do and an online system cannot (a Viterbi
+// label at t depends on the epochs after t). The demo and `region-study` still hand the IMMs
+// recognise()'s labels (the figures of docs/results.md); the demo prints the causal accuracy
+// beside them.
 #pragma once
 
 #include <Eigen/Core>
@@ -20,7 +27,7 @@
 #include "ctxfuse/classify/hmm.hpp"
 #include "ctxfuse/classify/joint.hpp"
 #include "ctxfuse/classify/svm.hpp"
-#include "ctxfuse/classify/svm_train.hpp"
+#include "ctxfuse/classify/svm_options.hpp"
 #include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/pipelines/region_imm/settings.hpp"
 
@@ -61,13 +68,6 @@ inline void check_labels(const LabelledFeatures& f) {
     if (l < 0 || l >= kRegions) throw std::invalid_argument("region_imm: label " + std::to_string(l) + " is not a region (0, 1, 2)");
 }
 
-struct RecogniserOptions {
-  // PSO over (log2 C, log2 gamma), 3-fold CV; a small swarm is enough for two parameters.
-  classify::SvmTuneOptions tune{.log2_c_min = -5.0, .log2_c_max = 10.0, .log2_gamma_min = -8.0, .log2_gamma_max = 3.0,
-                                .folds = 3, .fold_seed = 1, .pso = {.swarm_size = 6, .iterations = 5, .seed = 1}};
-  classify::HmmFitOptions hmm{};
-};
-
 struct Recogniser {
   classify::SvmModel<2, 3> svm;
   classify::GaussianHmm<kRegions, 2> hmm;
@@ -99,53 +99,6 @@ inline Recognition recognise(const Recogniser& r, const FeatureSeries& f) {
   return out;
 }
 
-/// PSO-SVM (one-vs-rest RBF) and HMM trained on the labelled logs in `train` (the SVM on all
-/// their epochs pooled, the HMM on each log as its own sequence, so that no transition is
-/// counted across the seam between two logs); per-region accuracies of both on `validate` give
-/// the joint vote's weights. Throws std::invalid_argument when `train` is empty, when a log's
-/// labels do not match its epochs, or a label is not a region.
-inline Recogniser train_recogniser(std::span<const LabelledFeatures> train, const LabelledFeatures& validate,
-                                   const RecogniserOptions& opts = {}) {
-  if (train.empty()) throw std::invalid_argument("region_imm: train_recogniser needs at least one training log");
-  for (const auto& f : train) check_labels(f);
-  check_labels(validate);
-  Recogniser r;
-  std::size_t rows = 0;
-  for (const auto& f : train) rows += f.features.x.size();
-  classify::SvmFeatures<2> X(static_cast<Eigen::Index>(rows), 2);
-  std::vector<int> labels;
-  labels.reserve(rows);
-  std::vector<classify::LabelledSequence<2>> sequences;
-  for (const auto& f : train) {
-    for (std::size_t i = 0; i < f.features.x.size(); ++i)
-      X.row(static_cast<Eigen::Index>(labels.size() + i)) = f.features.x[i].transpose();
-    labels.insert(labels.end(), f.labels.begin(), f.labels.end());
-    sequences.push_back({std::span<const Feature>(f.features.x), std::span<const int>(f.labels)});
-  }
-  classify::SvmTrainOptions so;
-  so.kernel = classify::SvmKernel::rbf;
-  so.multiclass = classify::SvmMulticlass::one_vs_rest;
-  r.tuned = classify::tune_svm_pso<2, 3>(X, labels, so, opts.tune);
-  so.C = r.tuned.C;
-  so.gamma = r.tuned.gamma;
-  r.svm = classify::train_svm<2, 3>(X, labels, so);
-  r.hmm = classify::fit_supervised<kRegions, 2>(std::span<const classify::LabelledSequence<2>>(sequences), opts.hmm);
-
-  Recognition v;
-  v.svm = svm_labels(r.svm, validate.features);
-  v.hmm = classify::viterbi<kRegions, 2>(r.hmm, std::span<const Feature>(validate.features.x)).path;
-  r.validation_accuracy[0] = classify::per_region_accuracy<kRegions>(validate.labels, v.svm);
-  r.validation_accuracy[1] = classify::per_region_accuracy<kRegions>(validate.labels, v.hmm);
-  r.vote = classify::WeightedVote<kRegions, 2>::from_accuracies(r.validation_accuracy);
-  return r;
-}
-
-/// One training log.
-inline Recogniser train_recogniser(const LabelledFeatures& train, const LabelledFeatures& validate,
-                                   const RecogniserOptions& opts = {}) {
-  return train_recogniser(std::span<const LabelledFeatures>(&train, 1), validate, opts);
-}
-
 /// The HMM's causal region posterior at every epoch (forward filter: p(region_t | features up
 /// to t)), what an online system knows; an epoch the filter cannot use (non-finite features,
 /// zero likelihood) repeats the previous posterior, and the uniform one before the first.
@@ -157,6 +110,23 @@ inline std::vector<Vector<kRegions>> hmm_posteriors(const Recogniser& r, const F
   for (const auto& x : f.x) {
     if (filter.step(x) == classify::FilterStatus::ok) last = filter.posterior();
     out.push_back(last);
+  }
+  return out;
+}
+
+/// The causal recognition (header): per epoch the SVM's label, the HMM forward filter's most
+/// probable region (`hmm`) and their joint vote, each from that epoch and earlier ones only.
+inline Recognition recognise_causal(const Recogniser& r, const FeatureSeries& f) {
+  Recognition out;
+  out.svm = svm_labels(r.svm, f);
+  const std::vector<Vector<kRegions>> post = hmm_posteriors(r, f);
+  out.hmm.resize(f.x.size());
+  out.joint.resize(f.x.size());
+  for (std::size_t i = 0; i < f.x.size(); ++i) {
+    Eigen::Index best = 0;
+    post[i].maxCoeff(&best);
+    out.hmm[i] = static_cast<int>(best);
+    out.joint[i] = r.vote({out.svm[i], out.hmm[i]});
   }
   return out;
 }
