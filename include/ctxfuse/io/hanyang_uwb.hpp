@@ -76,9 +76,7 @@ inline std::string_view bare_column_name(std::string_view s) {
 /// Reads the header line of `file` and returns the 0-based index of each wanted name.
 template <std::size_t N>
 std::array<std::size_t, N> header_columns(TextFile& file, Header& header, const std::array<std::string_view, N>& wanted) {
-  std::string_view line;
-  if (!file.next(line)) file.fail("empty file (no header)");
-  header = Header(split_fields(line, Separator::comma));
+  header = read_header(file, Separator::comma);
   std::array<std::size_t, N> idx{};
   for (std::size_t k = 0; k < N; ++k) {
     std::size_t i = 0;

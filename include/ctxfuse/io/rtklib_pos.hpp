@@ -153,7 +153,7 @@ inline RtklibPosFile read_rtklib_pos(const std::filesystem::path& path) {
       for (const auto& c : detail::kPosColumns)
         if (const auto i = header.find(c.name)) used.emplace_back(*i, &c);
       for (std::string_view required : {"latitude(deg)", "longitude(deg)", "height(m)", "Q", "ns"})
-        if (!header.find(required)) file.fail(cat("header has no column ", quote(required)));
+        (void)require_column(file, header, required);
       c_q = *header.find("Q");
       c_ns = *header.find("ns");
       have_header = true;

@@ -298,9 +298,7 @@ inline ProtocolRmse score_2d(std::span<const TimedPoint2> estimates, std::span<c
 /// name; stamps must not decrease.
 inline std::vector<TimedPoint2> read_hanyang_estimates(const std::filesystem::path& file_path) {
   io::TextFile file(file_path);
-  std::string_view line;
-  if (!file.next(line)) file.fail("empty file (no header)");
-  io::Header header(io::split_fields(line, io::Separator::comma));
+  const io::Header header = io::read_header(file, io::Separator::comma);
   std::array<std::size_t, 3> c{};
   auto column = [&](std::initializer_list<std::string_view> names) {
     for (std::size_t i = 0; i < header.size(); ++i)
