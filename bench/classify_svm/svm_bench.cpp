@@ -1,5 +1,6 @@
 // SvmPredictProbability/Ours vs /LibSvm: the same libsvm model file, loaded by libsvm and by our
-// loader, the same inputs. The model and its protocol: nlos_svm_model.hpp (shared with
+// loader, the same inputs; /Fast is ours with the fast Gauss transform (svm_fast_rbf.hpp), whose
+// one-off construction SvmFastRbfBuild times. The model and its protocol: nlos_svm_model.hpp (shared with
 // bench/per_sample). Before timing, both predictors are run on every benchmark input and must
 // agree (decision value to 1e-9, probabilities to 1e-6), so the comparison is between equal
 // computations.
@@ -7,8 +8,12 @@
 #include <svm.h>
 
 #include <array>
+#include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "ctxfuse/classify/svm.hpp"
+#include "ctxfuse/classify/svm_fast_rbf.hpp"
 #include "nlos_svm_model.hpp"
 
 namespace {
@@ -68,6 +73,97 @@ void SvmDecisionValue_LibSvm(benchmark::State& state) {
   }
 }
 
+// The fast Gauss transform evaluator (svm_fast_rbf.hpp) on the same model, its automatic choice.
+// Before timing it must agree with the exact path on every benchmark input (same label, decision
+// value and probabilities to 1e-9) and give libsvm's labels (svm_predict_values and
+// svm_predict_probability); the fraction of inputs that fell back to the exact path is reported
+// as a counter, with the plan (grid side h, order p, boxes, terms per box).
+struct FastFixture {
+  SvmFastRbf<2, 2> fast;
+  double fallback_predict = 0.0, fallback_decision = 0.0;
+};
+
+FastFixture& fast_fixture() {
+  static FastFixture f = [] {
+    auto& fx = fixture();
+    FastFixture r{SvmFastRbf<2, 2>(fx.ours)};
+    SvmPrediction<2> exact, out;
+    SvmFastReport report;
+    long predict_fallbacks = 0, decision_fallbacks = 0;
+    for (std::size_t i = 0; i < fx.inputs.size(); ++i) {
+      svm_predict(fx.ours, fx.inputs[i], exact);
+      r.fast.predict(fx.inputs[i], out, &report);
+      predict_fallbacks += report.fallback;
+      double prob[2], dec = 0.0;
+      const double libsvm_label = svm_predict_probability(fx.libsvm, fx.nodes[i].data(), prob);
+      const double libsvm_vote = svm_predict_values(fx.libsvm, fx.nodes[i].data(), &dec);
+      if (out.label != static_cast<int>(libsvm_label))
+        throw std::runtime_error("fast prediction and libsvm disagree on benchmark input " + std::to_string(i));
+      if (out.label != exact.label || std::abs(out.decision_values[0] - exact.decision_values[0]) > 1e-9 ||
+          std::abs(out.probabilities[0] - exact.probabilities[0]) > 1e-9)
+        throw std::runtime_error("fast and exact predictions disagree on benchmark input " + std::to_string(i));
+      svm_decision(fx.ours, fx.inputs[i], exact);
+      r.fast.decision(fx.inputs[i], out, &report);
+      decision_fallbacks += report.fallback;
+      if (out.label != static_cast<int>(libsvm_vote) || std::abs(out.decision_values[0] - dec) > 1e-9)
+        throw std::runtime_error("fast decision and libsvm disagree on benchmark input " + std::to_string(i));
+      if (out.label != exact.label || std::abs(out.decision_values[0] - exact.decision_values[0]) > 1e-9)
+        throw std::runtime_error("fast and exact decisions disagree on benchmark input " + std::to_string(i));
+    }
+    r.fallback_predict = static_cast<double>(predict_fallbacks) / static_cast<double>(fx.inputs.size());
+    r.fallback_decision = static_cast<double>(decision_fallbacks) / static_cast<double>(fx.inputs.size());
+    return r;
+  }();
+  return f;
+}
+
+void plan_counters(benchmark::State& state, const SvmFastRbfPlan& plan) {
+  state.counters["fast"] = plan.fast;
+  state.counters["h"] = plan.h;
+  state.counters["order"] = plan.order;
+  state.counters["boxes"] = plan.boxes;
+  state.counters["terms"] = plan.terms;
+}
+
+void SvmPredictProbability_Fast(benchmark::State& state) {
+  auto& fx = fixture();
+  auto& ff = fast_fixture();
+  SvmPrediction<2> out;
+  std::size_t i = 0;
+  for (auto _ : state) {
+    ff.fast.predict(fx.inputs[i], out);
+    benchmark::DoNotOptimize(out.probabilities[0]);
+    i = (i + 1) % fx.inputs.size();
+  }
+  state.counters["support_vectors"] = static_cast<double>(fx.ours.num_support_vectors());
+  state.counters["fallback_fraction"] = ff.fallback_predict;
+  plan_counters(state, ff.fast.plan());
+}
+
+void SvmDecisionValue_Fast(benchmark::State& state) {
+  auto& fx = fixture();
+  auto& ff = fast_fixture();
+  SvmPrediction<2> out;
+  std::size_t i = 0;
+  for (auto _ : state) {
+    ff.fast.decision(fx.inputs[i], out);
+    benchmark::DoNotOptimize(out.decision_values[0]);
+    i = (i + 1) % fx.inputs.size();
+  }
+  state.counters["fallback_fraction"] = ff.fallback_decision;
+  plan_counters(state, ff.fast.plan());
+}
+
+// The one-off cost of the fast evaluator: choosing (h, p) and building the expansions.
+void SvmFastRbfBuild(benchmark::State& state) {
+  auto& fx = fixture();
+  for (auto _ : state) {
+    SvmFastRbf<2, 2> fast(fx.ours);
+    benchmark::DoNotOptimize(fast.plan().order);
+  }
+  plan_counters(state, SvmFastRbf<2, 2>(fx.ours).plan());
+}
+
 // The kernel block alone (256 support vectors, 2 features) on each compiled instruction set,
 // to show what CPUs without AVX-512 get from the exact path.
 template <int Variant>
@@ -119,6 +215,9 @@ BENCHMARK(SvmPredictProbability_Ours)->Name(CTXFUSE_BENCH_NAME("SvmPredictProbab
 BENCHMARK(SvmPredictProbability_LibSvm)->Name(CTXFUSE_BENCH_NAME("SvmPredictProbability", "LibSvm"))->Unit(benchmark::kMicrosecond);
 BENCHMARK(SvmDecisionValue_Ours)->Name(CTXFUSE_BENCH_NAME("SvmDecisionValue", "Ours"))->Unit(benchmark::kMicrosecond);
 BENCHMARK(SvmDecisionValue_LibSvm)->Name(CTXFUSE_BENCH_NAME("SvmDecisionValue", "LibSvm"))->Unit(benchmark::kMicrosecond);
+BENCHMARK(SvmPredictProbability_Fast)->Name(CTXFUSE_BENCH_NAME("SvmPredictProbability", "Fast"))->Unit(benchmark::kMicrosecond);
+BENCHMARK(SvmDecisionValue_Fast)->Name(CTXFUSE_BENCH_NAME("SvmDecisionValue", "Fast"))->Unit(benchmark::kMicrosecond);
+BENCHMARK(SvmFastRbfBuild)->Name(CTXFUSE_BENCH_NAME("SvmFastRbfBuild", "Fast"))->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -263,22 +263,22 @@ Eigen::Matrix<double, Dim, 1> svm_standardize(const SvmModel<Dim, MaxClasses>& m
   return (x - model.input_mean).cwiseQuotient(model.input_std);
 }
 
-/// Decision values of every machine into out.decision_values, and the label by vote (one-vs-one,
-/// ties to the lower class index, as libsvm) or by the largest decision value (one-vs-rest).
-/// On bad input `out` is left untouched.
-template <int Dim, int MaxClasses>
-SvmStatus svm_decision(const SvmModel<Dim, MaxClasses>& model, const Eigen::Matrix<double, Dim, 1>& x,
-                       SvmPrediction<MaxClasses>& out) {
+namespace svm_detail {
+
+/// The input checks of svm_decision and svm_predict (also used by svm_fast_rbf.hpp).
+template <int Dim>
+SvmStatus input_status(const Eigen::Matrix<double, Dim, 1>& x) {
   if (!x.allFinite()) return SvmStatus::non_finite_input;
   if (x.cwiseAbs().maxCoeff() > 1e150) return SvmStatus::input_magnitude;
-  const Eigen::Matrix<double, Dim, 1> xs = svm_standardize(model, x);
+  return SvmStatus::ok;
+}
+
+/// From the kernel sums of every machine: decision values sums - rho and the label by vote
+/// (one-vs-one, ties to the lower class index, as libsvm) or by the largest decision value
+/// (one-vs-rest). Shared by svm_decision and the fast evaluator of svm_fast_rbf.hpp.
+template <int Dim, int MaxClasses>
+void finish_decision(const SvmModel<Dim, MaxClasses>& model, const double* sums, SvmPrediction<MaxClasses>& out) {
   const int machines = model.num_machines();
-  std::array<double, SvmModel<Dim, MaxClasses>::kMaxMachines> sums{};
-  if (model.kernel == SvmKernel::linear) {
-    for (int m = 0; m < machines; ++m) sums[static_cast<std::size_t>(m)] = model.linear_weights.row(m).dot(xs);
-  } else {
-    svm_detail::rbf_sums(model, xs, machines, sums.data());
-  }
   out.num_classes = model.num_classes;
   out.num_machines = machines;
   out.has_probabilities = false;
@@ -304,20 +304,12 @@ SvmStatus svm_decision(const SvmModel<Dim, MaxClasses>& model, const Eigen::Matr
   }
   out.class_index = winner;
   out.label = model.labels[static_cast<std::size_t>(winner)];
-  return SvmStatus::ok;
 }
 
-/// Decision values plus, when the model has Platt parameters, class probabilities:
-///  - two classes: the clipped sigmoid of the single machine (libsvm's binary case);
-///  - one-vs-one: clipped pairwise sigmoids coupled by Wu-Lin-Weng's second method;
-///  - one-vs-rest: each machine's clipped sigmoid P(class m | x) divided by their sum, a common
-///    heuristic since k independent machines give no joint model.
-/// With probabilities the label is their argmax (first on ties), as svm_predict_probability.
+/// Adds the probabilities of svm_predict to a prediction filled by finish_decision (the model
+/// has Platt parameters); the label becomes their argmax.
 template <int Dim, int MaxClasses>
-SvmStatus svm_predict(const SvmModel<Dim, MaxClasses>& model, const Eigen::Matrix<double, Dim, 1>& x,
-                      SvmPrediction<MaxClasses>& out) {
-  const SvmStatus status = svm_decision(model, x, out);
-  if (status != SvmStatus::ok || !model.has_probability) return status;
+void add_probabilities(const SvmModel<Dim, MaxClasses>& model, SvmPrediction<MaxClasses>& out) {
   const int k = model.num_classes;
   const auto clip = [](double p) {
     return std::min(std::max(p, svm_detail::kMinPairProbability), 1.0 - svm_detail::kMinPairProbability);
@@ -349,6 +341,41 @@ SvmStatus svm_predict(const SvmModel<Dim, MaxClasses>& model, const Eigen::Matri
   out.class_index = best;
   out.label = model.labels[static_cast<std::size_t>(best)];
   out.has_probabilities = true;
+}
+
+}  // namespace svm_detail
+
+/// Decision values of every machine into out.decision_values, and the label by vote (one-vs-one,
+/// ties to the lower class index, as libsvm) or by the largest decision value (one-vs-rest).
+/// On bad input `out` is left untouched.
+template <int Dim, int MaxClasses>
+SvmStatus svm_decision(const SvmModel<Dim, MaxClasses>& model, const Eigen::Matrix<double, Dim, 1>& x,
+                       SvmPrediction<MaxClasses>& out) {
+  if (const SvmStatus status = svm_detail::input_status(x); status != SvmStatus::ok) return status;
+  const Eigen::Matrix<double, Dim, 1> xs = svm_standardize(model, x);
+  const int machines = model.num_machines();
+  std::array<double, SvmModel<Dim, MaxClasses>::kMaxMachines> sums{};
+  if (model.kernel == SvmKernel::linear) {
+    for (int m = 0; m < machines; ++m) sums[static_cast<std::size_t>(m)] = model.linear_weights.row(m).dot(xs);
+  } else {
+    svm_detail::rbf_sums(model, xs, machines, sums.data());
+  }
+  svm_detail::finish_decision(model, sums.data(), out);
+  return SvmStatus::ok;
+}
+
+/// Decision values plus, when the model has Platt parameters, class probabilities:
+///  - two classes: the clipped sigmoid of the single machine (libsvm's binary case);
+///  - one-vs-one: clipped pairwise sigmoids coupled by Wu-Lin-Weng's second method;
+///  - one-vs-rest: each machine's clipped sigmoid P(class m | x) divided by their sum, a common
+///    heuristic since k independent machines give no joint model.
+/// With probabilities the label is their argmax (first on ties), as svm_predict_probability.
+template <int Dim, int MaxClasses>
+SvmStatus svm_predict(const SvmModel<Dim, MaxClasses>& model, const Eigen::Matrix<double, Dim, 1>& x,
+                      SvmPrediction<MaxClasses>& out) {
+  const SvmStatus status = svm_decision(model, x, out);
+  if (status != SvmStatus::ok || !model.has_probability) return status;
+  svm_detail::add_probabilities(model, out);
   return SvmStatus::ok;
 }
 
