@@ -10,7 +10,7 @@
 
 #include <iostream>
 
-#include "ctxfuse/studies/gins_sim_study.hpp"
+#include "ctxfuse/instances/gins_sim_study.hpp"
 
 namespace {
 using namespace ctxfuse;

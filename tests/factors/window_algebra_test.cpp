@@ -199,8 +199,10 @@ TEST(WindowAlgebra, IndefiniteBlocksGiveAStatusAndLeaveThePriorAlone) {
 template <int M>
 SquareMatrix<M> random_spd(int seed, double decades) {
   std::srand(static_cast<unsigned>(seed));
-  const Eigen::HouseholderQR<SquareMatrix<M>> qr(SquareMatrix<M>::Random());
-  const SquareMatrix<M> Q = qr.householderQ();
+  // The orthogonal factor from a dynamic-size QR: one instantiation for every M (a fixed-size
+  // HouseholderQR costs g++ some 7 s of compile time per size).
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(Eigen::MatrixXd::Random(M, M));
+  const SquareMatrix<M> Q = Eigen::MatrixXd(qr.householderQ());
   Vector<M> eig;
   for (int i = 0; i < M; ++i) eig(i) = std::pow(10.0, decades * (M > 1 ? double(i) / (M - 1) : 0.0) - 2.0);
   SquareMatrix<M> S = Q * eig.asDiagonal() * Q.transpose();

@@ -117,4 +117,11 @@ DriveResult run_drive(const Drive& d, const Model& model, eskf::Belief<Model>& b
   return r;
 }
 
+// Compiled once, in drive_filter.cpp, for the two layouts the tests run (each instance costs
+// g++ some 30 s of CPU).
+extern template DriveResult run_drive<Nav15>(const Drive&, const Nav15&, eskf::Belief<Nav15>&, const Constraints&, double,
+                                             double, std::uint64_t);
+extern template DriveResult run_drive<Nav20>(const Drive&, const Nav20&, eskf::Belief<Nav20>&, const Constraints&, double,
+                                             double, std::uint64_t);
+
 }  // namespace ctxfuse::test

@@ -7,7 +7,7 @@
 #include <cmath>
 #include <vector>
 
-#include "ctxfuse/studies/nlos_uwb.hpp"
+#include "ctxfuse/instances/nlos_uwb.hpp"
 #include "support/data_dir.hpp"
 
 namespace nu = ctxfuse::pipelines::nlos_uwb;

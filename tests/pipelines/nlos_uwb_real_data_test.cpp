@@ -17,7 +17,7 @@
 #include <cstdio>
 #include <string>
 
-#include "ctxfuse/studies/nlos_uwb.hpp"
+#include "ctxfuse/instances/nlos_uwb.hpp"
 #include "support/data_dir.hpp"
 
 namespace nu = ctxfuse::pipelines::nlos_uwb;

@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <utility>
 
-#include "ctxfuse/studies/nlos_uwb_sim.hpp"
+#include "ctxfuse/instances/nlos_uwb.hpp"
 
 namespace {
 using namespace ctxfuse;

@@ -16,7 +16,7 @@
 #include <filesystem>
 #include <vector>
 
-#include "ctxfuse/studies/nlos_uwb.hpp"
+#include "ctxfuse/instances/nlos_uwb.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/recording.hpp"
 #include "ctxfuse/sim/uwb_site.hpp"
 

@@ -18,7 +18,7 @@
 #include "cli/options.hpp"
 #include "cli/registry.hpp"
 #include "cli/seed_list.hpp"
-#include "ctxfuse/studies/gins_sim_study.hpp"
+#include "ctxfuse/instances/gins_sim_study.hpp"
 #include "ctxfuse/sim/drive.hpp"
 
 namespace ctxfuse::cli {

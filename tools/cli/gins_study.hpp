@@ -5,7 +5,7 @@
 #pragma once
 
 #include "cli/json.hpp"
-#include "ctxfuse/studies/gins_sim_study.hpp"
+#include "ctxfuse/instances/gins_sim_study.hpp"
 
 namespace ctxfuse::cli {
 

@@ -20,7 +20,7 @@
 #include "cli/registry.hpp"
 #include "cli/uwb_plots.hpp"
 #include "ctxfuse/classify/dempster_shafer.hpp"
-#include "ctxfuse/studies/nlos_uwb_sim.hpp"
+#include "ctxfuse/instances/nlos_uwb.hpp"
 
 namespace ctxfuse::cli {
 namespace {

@@ -29,7 +29,7 @@
 #include "cli/run_registry.hpp"
 #include "cli/uwb_plots.hpp"
 #include "ctxfuse/classify/svm_io.hpp"
-#include "ctxfuse/studies/nlos_uwb.hpp"
+#include "ctxfuse/instances/nlos_uwb.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/recording.hpp"
 
 namespace ctxfuse::cli {

@@ -188,10 +188,15 @@ inline constexpr std::array<std::string_view, 17> kNlosUwbVariants{
     "least_squares",        // snapshot LS per epoch
     "motion_model_only"};   // the "IMU only" baseline: the motion model from the first fix
 
-/// Runs one variant of kNlosUwbVariants (by index) on `rs`. No reference is involved.
-inline pipelines::nlos_uwb::Track run_nlos_uwb_variant(std::size_t index, std::span<const messages::UwbRange> rs,
-                                                       const pipelines::nlos_uwb::NlosClassifier& classifier,
-                                                       const pipelines::nlos_uwb::Settings& s) {
+namespace detail {
+
+/// run_nlos_uwb_variant's body, a template only so that the compiled target ctxfuse::instances
+/// can hold its one instance (void; instances/nlos_uwb.hpp): it instantiates every estimator
+/// and policy of the variants.
+template <class = void>
+pipelines::nlos_uwb::Track run_nlos_uwb_variant(std::size_t index, std::span<const messages::UwbRange> rs,
+                                                const pipelines::nlos_uwb::NlosClassifier& classifier,
+                                                const pipelines::nlos_uwb::Settings& s) {
   namespace nu = pipelines::nlos_uwb;
   using Calibrated = nu::CalibratedRangeEkf<ChiSquareGate, false, nu::NlosClassifier::kMaxAnchors>;
   using CalibratedLag = nu::CalibratedRangeEkf<ChiSquareGate, true, nu::NlosClassifier::kMaxAnchors>;
@@ -216,6 +221,15 @@ inline pipelines::nlos_uwb::Track run_nlos_uwb_variant(std::size_t index, std::s
     case 16: return nu::run(rs, nu::MotionModelOnly(s), nu::NoNlosHandling{}, classifier, s);
     default: throw std::invalid_argument("no variant " + std::to_string(index));
   }
+}
+
+}  // namespace detail
+
+/// Runs one variant of kNlosUwbVariants (by index) on `rs`. No reference is involved.
+inline pipelines::nlos_uwb::Track run_nlos_uwb_variant(std::size_t index, std::span<const messages::UwbRange> rs,
+                                                       const pipelines::nlos_uwb::NlosClassifier& classifier,
+                                                       const pipelines::nlos_uwb::Settings& s) {
+  return detail::run_nlos_uwb_variant<>(index, rs, classifier, s);
 }
 
 /// Runs the variants named in `names` (every one of kNlosUwbVariants, in that order, when

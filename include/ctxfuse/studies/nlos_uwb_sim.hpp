@@ -218,10 +218,14 @@ inline pipelines::nlos_uwb::ImuFusionSettings imu_fusion_settings(const sim::Imu
   return s;
 }
 
-/// Runs the protocol on the drive of `base` (its route, IMU, sensors) at `seed`: trains both
-/// SVMs on the training seeds' drives, runs every variant on the evaluated drive and scores it.
-inline NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::uint64_t seed, const NlosSimProtocol& protocol = {},
-                                           const pipelines::nlos_uwb::Settings& s = {}) {
+namespace detail {
+
+/// evaluate_nlos_uwb_sim's body, a template only so that the compiled target ctxfuse::instances
+/// can hold its one instance (void; instances/nlos_uwb.hpp): it instantiates every estimator
+/// and policy of the variants.
+template <class = void>
+NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::uint64_t seed, const NlosSimProtocol& protocol,
+                                    const pipelines::nlos_uwb::Settings& s) {
   namespace nu = pipelines::nlos_uwb;
   if (const std::string problem = s.validate(); !problem.empty()) throw std::invalid_argument("settings: " + problem);
   NlosSimReport rep;
@@ -291,6 +295,15 @@ inline NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::ui
   add_run(kNlosSimVariants[13], nu::run(std::span<const messages::ImuSample>(imu), rs, nu::ImuRangeEkf<>(s, sheet), nu::PaperEpochRule{}, classifier, s));
   score_identification(rep.proposed, lr, rep.svm_vu_model, rep);
   return rep;
+}
+
+}  // namespace detail
+
+/// Runs the protocol on the drive of `base` (its route, IMU, sensors) at `seed`: trains both
+/// SVMs on the training seeds' drives, runs every variant on the evaluated drive and scores it.
+inline NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::uint64_t seed, const NlosSimProtocol& protocol = {},
+                                           const pipelines::nlos_uwb::Settings& s = {}) {
+  return detail::evaluate_nlos_uwb_sim<>(base, seed, protocol, s);
 }
 
 }  // namespace ctxfuse::studies
