@@ -10,6 +10,7 @@
 #include <span>
 #include <vector>
 
+#include "ctxfuse/instances/region_imm.hpp"  // region_imm::run compiled once (ctxfuse::instances)
 #include "ctxfuse/pipelines/region_imm.hpp"
 #include "ctxfuse/pipelines/region_imm/recogniser_io.hpp"
 

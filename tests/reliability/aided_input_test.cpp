@@ -14,6 +14,7 @@
 #include <limits>
 
 #include "ctxfuse/pipelines/region_imm/estimators.hpp"
+#include "ctxfuse/instances/region_imm.hpp"  // region_imm::run compiled once (ctxfuse::instances)
 #include "ctxfuse/pipelines/region_imm/run.hpp"
 
 namespace {

@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "ctxfuse/eval/position_error.hpp"
+#include "ctxfuse/instances/region_imm.hpp"  // region_imm::run compiled once (ctxfuse::instances)
 #include "ctxfuse/eval/region_errors.hpp"
 #include "ctxfuse/pipelines/region_imm/recogniser.hpp"
 #include "ctxfuse/sim/scenarios.hpp"

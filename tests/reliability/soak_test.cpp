@@ -4,6 +4,7 @@
 // program reports it, scripts/soak.sh).
 #include <gtest/gtest.h>
 
+#include "ctxfuse/instances/region_imm.hpp"  // region_imm::run compiled once (ctxfuse::instances)
 #include "soak_run.hpp"
 
 namespace {

@@ -8,6 +8,7 @@
 
 #include "cli/region_imm_report.hpp"
 #include "cli/registry.hpp"
+#include "ctxfuse/instances/region_imm.hpp"  // run() compiled once (ctxfuse::instances)
 #include "ctxfuse/studies/region_training.hpp"
 #include "ctxfuse/sim/streams.hpp"
 

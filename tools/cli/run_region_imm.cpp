@@ -12,6 +12,7 @@
 #include "cli/options.hpp"
 #include "cli/region_imm_report.hpp"
 #include "cli/run_registry.hpp"
+#include "ctxfuse/instances/region_imm.hpp"  // run() compiled once (ctxfuse::instances)
 #include "ctxfuse/studies/region_training.hpp"
 #include "ctxfuse/sim/logs.hpp"
 #include "ctxfuse/pipelines/region_imm/recogniser_io.hpp"
