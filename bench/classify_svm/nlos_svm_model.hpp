@@ -98,6 +98,21 @@ struct NlosSvmBenchModel {
   int nlos_class() const { return ours.labels[0] == 1 ? 0 : 1; }
 };
 
+/// libsvm's C-SVC as the benchmark model trains it: RBF, gamma 0.5, C 1, Platt probabilities
+/// (cache_mb changes only the training's speed).
+inline svm_parameter nlos_bench_svm_parameters(double cache_mb) {
+  svm_parameter p{};
+  p.svm_type = C_SVC;
+  p.kernel_type = RBF;
+  p.gamma = 0.5;
+  p.C = 1.0;
+  p.cache_size = cache_mb;
+  p.eps = 1e-3;
+  p.shrinking = 1;
+  p.probability = 1;
+  return p;
+}
+
 namespace nlos_svm_detail {
 inline void quiet(const char*) {}
 }  // namespace nlos_svm_detail
@@ -127,15 +142,7 @@ inline NlosSvmBenchModel build_nlos_svm_bench_model(const std::string& cache_pat
       y[i] = train[i].nlos;
     }
     svm_problem prob{static_cast<int>(train.size()), y.data(), ptrs.data()};
-    svm_parameter p{};
-    p.svm_type = C_SVC;
-    p.kernel_type = RBF;
-    p.gamma = 0.5;
-    p.C = 1.0;
-    p.cache_size = 500;
-    p.eps = 1e-3;
-    p.shrinking = 1;
-    p.probability = 1;
+    const svm_parameter p = nlos_bench_svm_parameters(500);
     std::srand(1);
     svm_model* trained = svm_train(&prob, &p);
     const auto tmp = cache + ".tmp";

@@ -125,32 +125,25 @@ void plan_counters(benchmark::State& state, const SvmFastRbfPlan& plan) {
   state.counters["terms"] = plan.terms;
 }
 
-void SvmPredictProbability_Fast(benchmark::State& state) {
+// SvmPredictProbability/Fast (Probabilities) and SvmDecisionValue/Fast.
+template <bool Probabilities>
+void SvmFast(benchmark::State& state) {
   auto& fx = fixture();
   auto& ff = fast_fixture();
   SvmPrediction<2> out;
   std::size_t i = 0;
   for (auto _ : state) {
-    ff.fast.predict(fx.inputs[i], out);
-    benchmark::DoNotOptimize(out.probabilities[0]);
+    if constexpr (Probabilities) {
+      ff.fast.predict(fx.inputs[i], out);
+      benchmark::DoNotOptimize(out.probabilities[0]);
+    } else {
+      ff.fast.decision(fx.inputs[i], out);
+      benchmark::DoNotOptimize(out.decision_values[0]);
+    }
     i = (i + 1) % fx.inputs.size();
   }
-  state.counters["support_vectors"] = static_cast<double>(fx.ours.num_support_vectors());
-  state.counters["fallback_fraction"] = ff.fallback_predict;
-  plan_counters(state, ff.fast.plan());
-}
-
-void SvmDecisionValue_Fast(benchmark::State& state) {
-  auto& fx = fixture();
-  auto& ff = fast_fixture();
-  SvmPrediction<2> out;
-  std::size_t i = 0;
-  for (auto _ : state) {
-    ff.fast.decision(fx.inputs[i], out);
-    benchmark::DoNotOptimize(out.decision_values[0]);
-    i = (i + 1) % fx.inputs.size();
-  }
-  state.counters["fallback_fraction"] = ff.fallback_decision;
+  if constexpr (Probabilities) state.counters["support_vectors"] = static_cast<double>(fx.ours.num_support_vectors());
+  state.counters["fallback_fraction"] = Probabilities ? ff.fallback_predict : ff.fallback_decision;
   plan_counters(state, ff.fast.plan());
 }
 
@@ -215,8 +208,8 @@ BENCHMARK(SvmPredictProbability_Ours)->Name(CTXFUSE_BENCH_NAME("SvmPredictProbab
 BENCHMARK(SvmPredictProbability_LibSvm)->Name(CTXFUSE_BENCH_NAME("SvmPredictProbability", "LibSvm"))->Unit(benchmark::kMicrosecond);
 BENCHMARK(SvmDecisionValue_Ours)->Name(CTXFUSE_BENCH_NAME("SvmDecisionValue", "Ours"))->Unit(benchmark::kMicrosecond);
 BENCHMARK(SvmDecisionValue_LibSvm)->Name(CTXFUSE_BENCH_NAME("SvmDecisionValue", "LibSvm"))->Unit(benchmark::kMicrosecond);
-BENCHMARK(SvmPredictProbability_Fast)->Name(CTXFUSE_BENCH_NAME("SvmPredictProbability", "Fast"))->Unit(benchmark::kMicrosecond);
-BENCHMARK(SvmDecisionValue_Fast)->Name(CTXFUSE_BENCH_NAME("SvmDecisionValue", "Fast"))->Unit(benchmark::kMicrosecond);
+BENCHMARK(SvmFast<true>)->Name(CTXFUSE_BENCH_NAME("SvmPredictProbability", "Fast"))->Unit(benchmark::kMicrosecond);
+BENCHMARK(SvmFast<false>)->Name(CTXFUSE_BENCH_NAME("SvmDecisionValue", "Fast"))->Unit(benchmark::kMicrosecond);
 BENCHMARK(SvmFastRbfBuild)->Name(CTXFUSE_BENCH_NAME("SvmFastRbfBuild", "Fast"))->Unit(benchmark::kMillisecond);
 
 }  // namespace

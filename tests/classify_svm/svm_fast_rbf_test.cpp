@@ -24,7 +24,7 @@
 #include <string>
 #include <vector>
 
-#include "../../bench/classify_svm/nlos_svm_model.hpp"  // simulate_nlos_drive: the benchmark's protocol
+#include "../../bench/classify_svm/nlos_svm_model.hpp"  // simulate_nlos_drive and the libsvm parameters: the benchmark's protocol
 #include "classify_svm/svm_test_data.hpp"
 #include "ctxfuse/classify/svm_fast_rbf.hpp"
 #include "ctxfuse/classify/svm_train.hpp"
@@ -170,15 +170,7 @@ void train_rows(Trained& t, unsigned seed) {
   svm_set_print_string_function(&quiet);
   for (auto& r : t.rows) t.ptrs.push_back(r.data());
   t.problem = {static_cast<int>(t.rows.size()), t.y.data(), t.ptrs.data()};
-  svm_parameter p{};
-  p.svm_type = C_SVC;
-  p.kernel_type = RBF;
-  p.gamma = 0.5;
-  p.C = 1.0;
-  p.cache_size = 100;
-  p.eps = 1e-3;
-  p.shrinking = 1;
-  p.probability = 1;
+  const svm_parameter p = ctxfuse::bench::nlos_bench_svm_parameters(100);
   std::srand(seed);
   t.libsvm = svm_train(&t.problem, &p);
 }
