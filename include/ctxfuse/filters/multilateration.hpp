@@ -126,8 +126,12 @@ inline Eigen::Vector2d initial_xy(std::span<const messages::UwbRange> ranges, co
 }
 }  // namespace detail
 
+// multilaterate and multilaterate_3d are templates of a defaulted parameter (called as plain
+// functions) so that a source that includes this header and calls neither compiles no solver.
+
 /// The position that best fits `ranges` (all of one time stamp, one per anchor).
-inline Multilateration multilaterate(std::span<const messages::UwbRange> ranges, const MultilaterationOptions& o = {}) {
+template <class = void>
+Multilateration multilaterate(std::span<const messages::UwbRange> ranges, const MultilaterationOptions& o = {}) {
   Multilateration out;
   if (const Status st = detail::check_ranges(ranges, 3); !st.accepted()) {
     out.status = st;
@@ -140,7 +144,8 @@ inline Multilateration multilaterate(std::span<const messages::UwbRange> ranges,
 /// coplanar (o.tag_height_m unused; o.initial's x, y as in multilaterate). The cost has a
 /// minimum on each side of the anchors' mean height when they are nearly coplanar, so it
 /// solves from 1 m above and below their highest and lowest anchors and keeps the best fit.
-inline Multilateration3d multilaterate_3d(std::span<const messages::UwbRange> ranges, const MultilaterationOptions& o = {}) {
+template <class = void>
+Multilateration3d multilaterate_3d(std::span<const messages::UwbRange> ranges, const MultilaterationOptions& o = {}) {
   Multilateration3d best;
   if (const Status st = detail::check_ranges(ranges, 4); !st.accepted()) {
     best.status = st;

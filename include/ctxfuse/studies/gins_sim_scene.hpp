@@ -48,7 +48,8 @@ inline SceneSamples scene_samples(const sim::Drive& d) {
 
 /// The classifier for a test drive of configuration `test`: trained on the drives of seeds
 /// test.seed + 101 .. + 103 (RegionTrainingDrives), true scene labels.
-inline SceneSvm train_scene_svm_for(const sim::DriveConfig& test) {
+template <class = void>
+SceneSvm train_scene_svm_for(const sim::DriveConfig& test) {
   std::vector<features::GnssSceneFeatures> rows;
   std::vector<int> labels;
   for (std::uint64_t k = 0; k < RegionTrainingDrives::train_drives; ++k) {
@@ -69,7 +70,8 @@ inline SceneSvm train_scene_svm_for(const sim::DriveConfig& test) {
 
 /// Scene probabilities (open, obstructed, indoor) per epoch; a scene the model was not trained
 /// on gets 0. An epoch the SVM cannot score gets NaN (the noise policy then refuses it).
-inline std::vector<policies::SceneProbabilities> scene_probabilities(const SceneSvm& svm, const SceneSamples& s) {
+template <class = void>
+std::vector<policies::SceneProbabilities> scene_probabilities(const SceneSvm& svm, const SceneSamples& s) {
   std::vector<policies::SceneProbabilities> out;
   out.reserve(s.x.size());
   for (const auto& f : s.x) {

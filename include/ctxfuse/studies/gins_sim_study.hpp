@@ -328,7 +328,8 @@ struct GinsSimStudy {
 
 /// Every scheme with fixed, classifier and true-scene R on a simulated drive (the scene SVM is
 /// trained on the drives of other seeds of the same configuration).
-inline GinsSimStudy gins_sim_study(const sim::Drive& drive, const GinsSimSettings& s = {}) {
+template <class = void>
+GinsSimStudy gins_sim_study(const sim::Drive& drive, const GinsSimSettings& s = {}) {
   const sim::DriveConfig& cfg = drive.config;
   const GinsSimDrive d = gins_sim_drive(drive);
   const SceneSamples samples = scene_samples(drive);
@@ -367,7 +368,8 @@ inline GinsSimStudy gins_sim_study(const sim::Drive& drive, const GinsSimSetting
 }
 
 /// The study on the drive that `cfg` simulates.
-inline GinsSimStudy gins_sim_study(const sim::DriveConfig& cfg, const GinsSimSettings& s = {}) {
+template <class = void>
+GinsSimStudy gins_sim_study(const sim::DriveConfig& cfg, const GinsSimSettings& s = {}) {
   return gins_sim_study(sim::simulate_drive(cfg), s);
 }
 

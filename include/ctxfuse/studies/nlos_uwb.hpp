@@ -79,8 +79,9 @@ struct IdentificationReport {
 
 /// Scores the verdicts of a run against residual labels (ranges where a classifier gave no
 /// evidence are not scored for it).
-inline IdentificationReport identification(const pipelines::nlos_uwb::Track& track, std::span<const io::HanyangReferencePose> ref,
-                                           const pipelines::nlos_uwb::Settings& s) {
+template <class = void>
+IdentificationReport identification(const pipelines::nlos_uwb::Track& track, std::span<const io::HanyangReferencePose> ref,
+                                    const pipelines::nlos_uwb::Settings& s) {
   classify::ConfusionMatrix svm(2), cons(2), ds(2);
   for (const auto& rec : track.ranges) {
     const int y = residual_label(rec.range, ref, s);
@@ -95,8 +96,9 @@ inline IdentificationReport identification(const pipelines::nlos_uwb::Track& tra
 
 /// The SVM's training rows of one recording: the pipeline's own features (the EKF without NLOS
 /// handling supplies v_i, as at run time) with residual labels from that recording's reference.
-inline void append_svm_rows(const std::filesystem::path& case_dir, const pipelines::nlos_uwb::Settings& s,
-                            pipelines::nlos_uwb::LabelledSvmRows& rows) {
+template <class = void>
+void append_svm_rows(const std::filesystem::path& case_dir, const pipelines::nlos_uwb::Settings& s,
+                     pipelines::nlos_uwb::LabelledSvmRows& rows) {
   namespace nu = pipelines::nlos_uwb;
   const auto ranges = io::read_hanyang_uwb(case_dir).uwb_ranges();
   const auto ref = io::read_hanyang_reference(case_dir);
@@ -134,8 +136,9 @@ inline std::vector<std::filesystem::path> other_hanyang_cases(const std::filesys
 }
 
 /// The SVM trained on `cases` (none of them the scored one: the caller's split).
-inline pipelines::nlos_uwb::NlosSvm train_svm_on_cases(std::span<const std::filesystem::path> cases,
-                                                       const pipelines::nlos_uwb::Settings& s) {
+template <class = void>
+pipelines::nlos_uwb::NlosSvm train_svm_on_cases(std::span<const std::filesystem::path> cases,
+                                                const pipelines::nlos_uwb::Settings& s) {
   pipelines::nlos_uwb::LabelledSvmRows rows;
   for (const auto& c : cases) append_svm_rows(c, s, rows);
   return pipelines::nlos_uwb::train_nlos_svm(rows, s);
@@ -195,8 +198,8 @@ namespace detail {
 /// and policy of the variants.
 template <class = void>
 pipelines::nlos_uwb::Track run_nlos_uwb_variant(std::size_t index, std::span<const messages::UwbRange> rs,
-                                                const pipelines::nlos_uwb::NlosClassifier& classifier,
-                                                const pipelines::nlos_uwb::Settings& s) {
+                                         const pipelines::nlos_uwb::NlosClassifier& classifier,
+                                         const pipelines::nlos_uwb::Settings& s) {
   namespace nu = pipelines::nlos_uwb;
   using Calibrated = nu::CalibratedRangeEkf<ChiSquareGate, false, nu::NlosClassifier::kMaxAnchors>;
   using CalibratedLag = nu::CalibratedRangeEkf<ChiSquareGate, true, nu::NlosClassifier::kMaxAnchors>;
@@ -226,19 +229,21 @@ pipelines::nlos_uwb::Track run_nlos_uwb_variant(std::size_t index, std::span<con
 }  // namespace detail
 
 /// Runs one variant of kNlosUwbVariants (by index) on `rs`. No reference is involved.
-inline pipelines::nlos_uwb::Track run_nlos_uwb_variant(std::size_t index, std::span<const messages::UwbRange> rs,
-                                                       const pipelines::nlos_uwb::NlosClassifier& classifier,
-                                                       const pipelines::nlos_uwb::Settings& s) {
+template <class = void>
+pipelines::nlos_uwb::Track run_nlos_uwb_variant(std::size_t index, std::span<const messages::UwbRange> rs,
+                                                const pipelines::nlos_uwb::NlosClassifier& classifier,
+                                                const pipelines::nlos_uwb::Settings& s) {
   return detail::run_nlos_uwb_variant<>(index, rs, classifier, s);
 }
 
 /// Runs the variants named in `names` (every one of kNlosUwbVariants, in that order, when
 /// empty) on `rs` with `classifier`; nothing is scored (rmse NaN). Throws std::invalid_argument
 /// for an unknown name or settings that do not validate.
-inline std::vector<NlosUwbVariant> run_nlos_uwb_variants(std::span<const messages::UwbRange> rs,
-                                                         const pipelines::nlos_uwb::NlosClassifier& classifier,
-                                                         const pipelines::nlos_uwb::Settings& s,
-                                                         std::span<const std::string_view> names = {}) {
+template <class = void>
+std::vector<NlosUwbVariant> run_nlos_uwb_variants(std::span<const messages::UwbRange> rs,
+                                                  const pipelines::nlos_uwb::NlosClassifier& classifier,
+                                                  const pipelines::nlos_uwb::Settings& s,
+                                                  std::span<const std::string_view> names = {}) {
   if (const std::string problem = s.validate(); !problem.empty()) throw std::invalid_argument("settings: " + problem);
   std::vector<NlosUwbVariant> out;
   auto add = [&](std::size_t i) { out.push_back({std::string(kNlosUwbVariants[i]), run_nlos_uwb_variant(i, rs, classifier, s), {}}); };
@@ -262,9 +267,10 @@ inline void score_nlos_uwb_variants(std::vector<NlosUwbVariant>& variants, std::
 /// (none: p1 absent, R = p2), and scores each against the case's reference with the authors'
 /// protocol on `span`. Throws std::invalid_argument when a training case is the scored one or
 /// the reference does not fit the span, io::ParseError on bad files.
-inline NlosUwbCaseReport evaluate_nlos_uwb_case(const std::filesystem::path& case_dir,
-                                                std::span<const std::filesystem::path> training_cases,
-                                                const pipelines::nlos_uwb::Settings& s, const HanyangSpan& span) {
+template <class = void>
+NlosUwbCaseReport evaluate_nlos_uwb_case(const std::filesystem::path& case_dir,
+                                         std::span<const std::filesystem::path> training_cases,
+                                         const pipelines::nlos_uwb::Settings& s, const HanyangSpan& span) {
   namespace nu = pipelines::nlos_uwb;
   namespace fs = std::filesystem;
   if (const std::string problem = s.validate(); !problem.empty()) throw std::invalid_argument("settings: " + problem);

@@ -82,7 +82,8 @@ struct LabelledRanges {
   std::vector<bool> nlos;
 };
 
-inline LabelledRanges labelled_ranges(const sim::Drive& d) {
+template <class = void>
+LabelledRanges labelled_ranges(const sim::Drive& d) {
   LabelledRanges out;
   out.ranges.reserve(d.uwb.size());
   for (const auto& r : d.uwb) {
@@ -138,7 +139,8 @@ inline constexpr std::array<std::string_view, 14> kNlosSimVariants{
     "ekf_imu_gate_paper_rule"};    // the EKF with the IMU, the gate and the paper's rule
 
 /// The SVM's training rows of one simulated drive: the pipeline's features with truth labels.
-inline void append_sim_svm_rows(const sim::Drive& d, const pipelines::nlos_uwb::Settings& s, pipelines::nlos_uwb::LabelledSvmRows& rows) {
+template <class = void>
+void append_sim_svm_rows(const sim::Drive& d, const pipelines::nlos_uwb::Settings& s, pipelines::nlos_uwb::LabelledSvmRows& rows) {
   namespace nu = pipelines::nlos_uwb;
   const LabelledRanges lr = labelled_ranges(d);
   const nu::Track track = nu::run(std::span<const messages::UwbRange>(lr.ranges), nu::RangeEkf<>(s), nu::NoNlosHandling{}, nu::NlosClassifier(s), s);
@@ -152,8 +154,9 @@ inline void append_sim_svm_rows(const sim::Drive& d, const pipelines::nlos_uwb::
 
 /// Scores a run's verdicts against the simulator's labels; the v_u-only SVM is evaluated on
 /// the same features.
-inline void score_identification(const pipelines::nlos_uwb::Track& track, const LabelledRanges& lr, const RangeRateSvm& svm_vu,
-                                 NlosSimReport& rep) {
+template <class = void>
+void score_identification(const pipelines::nlos_uwb::Track& track, const LabelledRanges& lr, const RangeRateSvm& svm_vu,
+                          NlosSimReport& rep) {
   namespace nu = pipelines::nlos_uwb;
   if (track.ranges.size() != lr.ranges.size()) throw std::logic_error("score_identification: the run lost ranges");
   classify::ConfusionMatrix vu(2), both(2), cons(2), ds(2);
@@ -179,7 +182,8 @@ inline void score_identification(const pipelines::nlos_uwb::Track& track, const 
 
 /// The strapdown mechanisation of the drive's IMU from the true state at t0 (flat site, ENU,
 /// biases unknown: zero), one position per `times` entry in [t0, ...).
-inline std::vector<eval::TimedPosition> imu_only_track(const sim::Drive& d, double t0, std::span<const double> times) {
+template <class = void>
+std::vector<eval::TimedPosition> imu_only_track(const sim::Drive& d, double t0, std::span<const double> times) {
   std::vector<eval::TimedPosition> out;
   if (d.imu.empty() || d.truth.size() != d.imu.size()) return out;
   std::size_t k = 0;
@@ -301,8 +305,9 @@ NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::uint64_t 
 
 /// Runs the protocol on the drive of `base` (its route, IMU, sensors) at `seed`: trains both
 /// SVMs on the training seeds' drives, runs every variant on the evaluated drive and scores it.
-inline NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::uint64_t seed, const NlosSimProtocol& protocol = {},
-                                           const pipelines::nlos_uwb::Settings& s = {}) {
+template <class = void>
+NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::uint64_t seed, const NlosSimProtocol& protocol = {},
+                                    const pipelines::nlos_uwb::Settings& s = {}) {
   return detail::evaluate_nlos_uwb_sim<>(base, seed, protocol, s);
 }
 

@@ -38,8 +38,9 @@ inline pipelines::region_imm::LabelledFeatures labelled_features(const sim::Driv
 
 /// The recogniser for a test drive of configuration `test` (its seed included), trained and
 /// validated on the drives of RegionTrainingDrives.
-inline pipelines::region_imm::Recogniser train_recogniser_for(const sim::DriveConfig& test,
-                                                                const pipelines::region_imm::RecogniserOptions& opts = {}) {
+template <class = void>
+pipelines::region_imm::Recogniser train_recogniser_for(const sim::DriveConfig& test,
+                                                         const pipelines::region_imm::RecogniserOptions& opts = {}) {
   std::vector<pipelines::region_imm::LabelledFeatures> train;
   for (std::uint64_t k = 0; k < RegionTrainingDrives::train_drives; ++k) {
     sim::DriveConfig cfg = test;

@@ -119,8 +119,9 @@ inline void difference_autocorrelation(const std::map<int, std::map<long, double
 }
 
 /// The static start's 3-D fit of each anchor's median range (fills facts' tag_height_*).
-inline void fit_tag_height(const std::map<int, std::vector<const messages::UwbRange*>>& by_anchor, double t0, double t1,
-                           RecordingFacts& f) {
+template <class = void>
+void fit_tag_height(const std::map<int, std::vector<const messages::UwbRange*>>& by_anchor, double t0, double t1,
+                    RecordingFacts& f) {
   if (!(t1 - t0 >= 1.0)) {
     f.tag_height_note = "static start under 1 s: no height fit";
     return;
@@ -151,7 +152,8 @@ inline void fit_tag_height(const std::map<int, std::vector<const messages::UwbRa
 }  // namespace detail
 
 /// The recording's facts from its time-ordered ranges (see the header comment).
-inline RecordingFacts describe_recording(std::span<const messages::UwbRange> ranges) {
+template <class = void>
+RecordingFacts describe_recording(std::span<const messages::UwbRange> ranges) {
   RecordingFacts f;
   if (ranges.empty()) {
     f.averaging_note = "no ranges: raw assumed";

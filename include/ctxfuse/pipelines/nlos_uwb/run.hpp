@@ -75,7 +75,8 @@ inline filters::MultilaterationOptions snapshot_options(const Settings& s) {
 /// centroid and from rings of 8 points at 3, 10, 30 and 60 m around it (the site's scale);
 /// not ok when no run gives an accepted fix. `max_rms_m` is the residual test (3 sigma for a
 /// start; infinite for the LS baseline, which keeps every solution).
-inline filters::Multilateration best_snapshot_fix(std::span<const messages::UwbRange> epoch, const Settings& s, double max_rms_m) {
+template <class = void>
+filters::Multilateration best_snapshot_fix(std::span<const messages::UwbRange> epoch, const Settings& s, double max_rms_m) {
   filters::MultilaterationOptions o = snapshot_options(s);
   o.max_rms_m = max_rms_m;
   filters::Multilateration best = filters::multilaterate(epoch, o);
@@ -296,7 +297,8 @@ Track run(std::span<const messages::ImuSample> imu, std::span<const messages::Uw
 /// anchors' centroid without a residual test (every solution kept; degenerate geometry or no
 /// convergence gives no estimate). The multi-start's smallest residual is no better here: an
 /// NLOS or gross range often fits the mirror image best (8.9 m on LOS case 1 against 0.87 m).
-inline Track least_squares_track(std::span<const messages::UwbRange> ranges, const Settings& s) {
+template <class = void>
+Track least_squares_track(std::span<const messages::UwbRange> ranges, const Settings& s) {
   Track track;
   filters::MultilaterationOptions o = snapshot_options(s);
   o.max_rms_m = std::numeric_limits<double>::infinity();

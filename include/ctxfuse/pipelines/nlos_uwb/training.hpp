@@ -82,7 +82,8 @@ classify::SvmModel<Dim, 2> train_balanced_svm(const LabelledSvmRows& rows, const
 }
 
 /// Trains p1's SVM on (v_u, v_i) (train_balanced_svm).
-inline NlosSvm train_nlos_svm(const LabelledSvmRows& rows, const Settings& s) {
+template <class = void>
+NlosSvm train_nlos_svm(const LabelledSvmRows& rows, const Settings& s) {
   return train_balanced_svm<2>(rows, s, [](const SvmInput& in) { return in.vector(); });
 }
 

@@ -46,7 +46,8 @@ struct GnssOnly {
 /// of radio range) or when every range has been gated for the health timeout (a lock-out,
 /// as policies/health.hpp defines it); without lock the last position is held (what such a
 /// system reports when it loses the tag).
-struct UwbOnly {
+template <class = void>
+struct UwbOnlyT {
   using Cv = models::ConstantVelocity<L, 2>;
   const Settings& s;
   Track track{};
@@ -114,5 +115,6 @@ struct UwbOnly {
     track.record(t, held, -1, locked);
   }
 };
+using UwbOnly = UwbOnlyT<>;
 
 }  // namespace ctxfuse::pipelines::region_imm

@@ -55,7 +55,8 @@ bool apply_constraint(const Settings& s, const messages::SpeedSample& v, double 
 }  // namespace detail
 
 /// One sub-model alone.
-struct SingleCore {
+template <class = void>
+struct SingleCoreT {
   static constexpr int kTakers = 1;
   static constexpr bool kWhole = false;
   using Filter = Ekf<models::PlanarImuModel, ChiSquareGate>;
@@ -93,6 +94,7 @@ struct SingleCore {
   }
   void open_cycle(double) {}
 };
+using SingleCore = SingleCoreT<>;
 
 /// Federated filter: local filter 0 takes GNSS, local filter 1 takes UWB; both take the
 /// vehicle constraint with R / beta_i (its share); fusion and reset at every receiver epoch.
@@ -100,7 +102,8 @@ struct SingleCore {
 /// combines the locals with the fixed weights beta_i instead of their information:
 /// x = sum beta_i x_i (on the manifold, about local 0), P = sum beta_i^2 P_i (the covariance of
 /// that fixed combination of independent estimates), then resets the locals as usual.
-struct FederatedCore {
+template <class = void>
+struct FederatedCoreT {
   static constexpr int kTakers = 1;
   static constexpr bool kWhole = false;
   using Filter = fkf::FederatedFilter<models::PlanarImuModel, 2, ChiSquareGate>;
@@ -163,6 +166,7 @@ struct FederatedCore {
   void open_cycle(double) {}
   models::PlanarImuModel process_model_{};
 };
+using FederatedCore = FederatedCoreT<>;
 
 using OdrMode = imm::Mode<models::PlanarImuModel, imm::Accepts<GnssTag, SpeedTag>, ChiSquareGate>;
 using IotrMode = imm::Mode<models::PlanarImuModel, imm::Accepts<GnssTag, UwbTag, SpeedTag>, ChiSquareGate>;

@@ -80,7 +80,8 @@ struct Recognition {
   std::vector<int> svm, hmm, joint;  // one label per epoch of the FeatureSeries
 };
 
-inline std::vector<int> svm_labels(const classify::SvmModel<2, 3>& model, const FeatureSeries& f) {
+template <class = void>
+std::vector<int> svm_labels(const classify::SvmModel<2, 3>& model, const FeatureSeries& f) {
   std::vector<int> out;
   out.reserve(f.x.size());
   for (const auto& x : f.x) {
@@ -90,7 +91,8 @@ inline std::vector<int> svm_labels(const classify::SvmModel<2, 3>& model, const 
   return out;
 }
 
-inline Recognition recognise(const Recogniser& r, const FeatureSeries& f) {
+template <class = void>
+Recognition recognise(const Recogniser& r, const FeatureSeries& f) {
   Recognition out;
   out.svm = svm_labels(r.svm, f);
   out.hmm = classify::viterbi<kRegions, 2>(r.hmm, std::span<const Feature>(f.x)).path;
@@ -102,7 +104,8 @@ inline Recognition recognise(const Recogniser& r, const FeatureSeries& f) {
 /// The HMM's causal region posterior at every epoch (forward filter: p(region_t | features up
 /// to t)), what an online system knows; an epoch the filter cannot use (non-finite features,
 /// zero likelihood) repeats the previous posterior, and the uniform one before the first.
-inline std::vector<Vector<kRegions>> hmm_posteriors(const Recogniser& r, const FeatureSeries& f) {
+template <class = void>
+std::vector<Vector<kRegions>> hmm_posteriors(const Recogniser& r, const FeatureSeries& f) {
   std::vector<Vector<kRegions>> out;
   out.reserve(f.x.size());
   classify::HmmForwardFilter<kRegions, 2> filter(r.hmm);
@@ -116,7 +119,8 @@ inline std::vector<Vector<kRegions>> hmm_posteriors(const Recogniser& r, const F
 
 /// The causal recognition (header): per epoch the SVM's label, the HMM forward filter's most
 /// probable region (`hmm`) and their joint vote, each from that epoch and earlier ones only.
-inline Recognition recognise_causal(const Recogniser& r, const FeatureSeries& f) {
+template <class = void>
+Recognition recognise_causal(const Recogniser& r, const FeatureSeries& f) {
   Recognition out;
   out.svm = svm_labels(r.svm, f);
   const std::vector<Vector<kRegions>> post = hmm_posteriors(r, f);

@@ -85,7 +85,8 @@ inline void write_recogniser(std::ostream& os, const Recogniser& r) {
   if (!text.empty() && text.back() != '\n') os << '\n';
 }
 
-inline Recogniser read_recogniser(std::istream& in, const std::string& file) {
+template <class = void>
+Recogniser read_recogniser(std::istream& in, const std::string& file) {
   std::size_t line_no = 0;
   std::string line;
   auto next = [&](const char* key) {
@@ -171,7 +172,8 @@ inline void save_recogniser(const std::filesystem::path& path, const Recogniser&
   if (!os) throw std::runtime_error(path.string() + ": write failed");
 }
 
-inline Recogniser load_recogniser(const std::filesystem::path& path) {
+template <class = void>
+Recogniser load_recogniser(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw RecogniserFileError(path.string(), 0, "", "cannot open for reading");
   return read_recogniser(in, path.string());

@@ -198,9 +198,11 @@ RunResult run_any(const messages::SensorLog& log, Estimator e, const Settings& s
 /// Runs one estimator over the log; `observer` (a pointer to anything callable with a const
 /// UpdateEvent&) sees every GNSS and UWB update of the IMU-driven estimators (aided.hpp).
 /// Throws std::invalid_argument when the log cannot drive the pipeline (no IMU, no epochs,
-/// never aligned) or a region IMM lacks its regions.
-inline RunResult run(const messages::SensorLog& log, Estimator e, const Settings& s, const RunOptions& o = {},
-                     UpdateObserver observer = {}) {
+/// never aligned) or a region IMM lacks its regions. (A template, called as a function, so that
+/// a source that includes this header without calling it compiles none of the estimators.)
+template <class = void>
+RunResult run(const messages::SensorLog& log, Estimator e, const Settings& s, const RunOptions& o = {},
+              UpdateObserver observer = {}) {
   return detail::run_any(log, e, s, o, observer);
 }
 

@@ -26,8 +26,9 @@ struct RecogniserOptions {
 /// counted across the seam between two logs); per-region accuracies of both on `validate` give
 /// the joint vote's weights. Throws std::invalid_argument when `train` is empty, when a log's
 /// labels do not match its epochs, or a label is not a region.
-inline Recogniser train_recogniser(std::span<const LabelledFeatures> train, const LabelledFeatures& validate,
-                                   const RecogniserOptions& opts = {}) {
+template <class = void>
+Recogniser train_recogniser(std::span<const LabelledFeatures> train, const LabelledFeatures& validate,
+                            const RecogniserOptions& opts = {}) {
   if (train.empty()) throw std::invalid_argument("region_imm: train_recogniser needs at least one training log");
   for (const auto& f : train) check_labels(f);
   check_labels(validate);
@@ -63,8 +64,9 @@ inline Recogniser train_recogniser(std::span<const LabelledFeatures> train, cons
 }
 
 /// One training log.
-inline Recogniser train_recogniser(const LabelledFeatures& train, const LabelledFeatures& validate,
-                                   const RecogniserOptions& opts = {}) {
+template <class = void>
+Recogniser train_recogniser(const LabelledFeatures& train, const LabelledFeatures& validate,
+                            const RecogniserOptions& opts = {}) {
   return train_recogniser(std::span<const LabelledFeatures>(&train, 1), validate, opts);
 }
 
