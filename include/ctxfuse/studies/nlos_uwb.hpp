@@ -198,8 +198,8 @@ namespace detail {
 /// and policy of the variants.
 template <class = void>
 pipelines::nlos_uwb::Track run_nlos_uwb_variant(std::size_t index, std::span<const messages::UwbRange> rs,
-                                         const pipelines::nlos_uwb::NlosClassifier& classifier,
-                                         const pipelines::nlos_uwb::Settings& s) {
+                                                const pipelines::nlos_uwb::NlosClassifier& classifier,
+                                                const pipelines::nlos_uwb::Settings& s) {
   namespace nu = pipelines::nlos_uwb;
   using Calibrated = nu::CalibratedRangeEkf<ChiSquareGate, false, nu::NlosClassifier::kMaxAnchors>;
   using CalibratedLag = nu::CalibratedRangeEkf<ChiSquareGate, true, nu::NlosClassifier::kMaxAnchors>;
