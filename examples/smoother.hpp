@@ -53,9 +53,9 @@ struct Run {
   RangeBearing sensor;
   Gaussian<4> initial;
   std::vector<Step> steps;
-  // Horizontal RMS errors over the epochs that have left the window's newest slot K-1 steps
-  // ago (the lagged estimate exists for them): the EKF's, the smoother's newest state's at that
-  // time, and the smoother's estimate of that epoch K-1 steps later.
+  // Horizontal RMS errors over the epochs that have a lagged estimate (all but the last K-1):
+  // the EKF's, the smoother's newest state at that epoch, and the smoother's estimate of that
+  // epoch K-1 steps later (the oldest state of its window then).
   double rms_ekf = 0.0, rms_newest = 0.0, rms_lagged = 0.0;
 };
 

@@ -75,7 +75,7 @@ std::vector<Vector<4>> batch(const se::ConstantVelocity& model, const Gaussian<4
   return x;
 }
 
-/// Largest difference between the window after step `k` and the batch states it holds.
+/// Largest difference between a step's window and the batch states of the same epochs.
 template <class StepT>
 double window_gap(const StepT& step, const std::vector<Vector<4>>& states, double dt) {
   double gap = 0.0;
