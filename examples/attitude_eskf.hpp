@@ -152,6 +152,7 @@ inline Run run(const Settings& s = {}) {
   };
   const int steps = static_cast<int>(std::lround(s.duration_s / s.imu_dt));
   const double gyro_sigma = out.model.gyro_noise_density / std::sqrt(s.imu_dt);
+  out.epochs.reserve(static_cast<std::size_t>(steps));
   for (int k = 1; k <= steps; ++k) {
     Epoch e;
     e.t = k * s.imu_dt;

@@ -71,6 +71,7 @@ inline Run run(const Settings& s = {}) {
   (void)smoother->initialise(0.0, out.initial);  // a finite prior and time: accepted
   Ekf<ConstantVelocity> ekf(out.model, out.initial);
 
+  out.steps.reserve(static_cast<std::size_t>(s.steps));
   sim::Rng rng(s.seed);
   Vector<4> truth(20.0, 10.0, 1.0, -0.5);
   for (int k = 1; k <= s.steps; ++k) {
