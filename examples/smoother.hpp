@@ -59,6 +59,17 @@ struct Run {
   double rms_ekf = 0.0, rms_newest = 0.0, rms_lagged = 0.0;
 };
 
+/// The window of a smoother of kLag states (any measurement model), oldest first, into `step`.
+template <class S>
+void record_window(const S& smoother, Step& step) {
+  const auto& w = smoother.window();
+  step.window_size = w.size;
+  for (int i = 0; i < w.size; ++i) {
+    step.times[static_cast<std::size_t>(i)] = w.epochs[static_cast<std::size_t>(i)].time;
+    step.window[static_cast<std::size_t>(i)] = w.epochs[static_cast<std::size_t>(i)].x;
+  }
+}
+
 inline Run run(const Settings& s = {}) {
   Run out;
   out.settings = s;
@@ -87,12 +98,7 @@ inline Run run(const Settings& s = {}) {
     m.add(out.sensor, step.z);  // one slot: the sensor's model and its measurement
     step.smoothed = smoother->step(step.t, {}, m);
     step.iterations = smoother->report().iterations;
-    const auto& w = smoother->window();
-    step.window_size = w.size;
-    for (int i = 0; i < w.size; ++i) {
-      step.times[static_cast<std::size_t>(i)] = w.epochs[static_cast<std::size_t>(i)].time;
-      step.window[static_cast<std::size_t>(i)] = w.epochs[static_cast<std::size_t>(i)].x;
-    }
+    record_window(*smoother, step);
     step.newest = smoother->newest_belief();
 
     (void)ekf.predict({}, s.dt);

@@ -140,11 +140,7 @@ TEST(SmootherExample, LinearWindowIsTheWholeRunsSolutionThroughMarginalisation) 
     start.push_back(step.truth);  // a linear problem: one Gauss-Newton step from anywhere
     const auto states = batch(r.model, r.initial, r.settings.dt, fix, z, start);
     se::Step window;  // the smoother's window in the example's record
-    window.window_size = smoother->window().size;
-    for (int i = 0; i < window.window_size; ++i) {
-      window.times[static_cast<std::size_t>(i)] = smoother->window().epochs[static_cast<std::size_t>(i)].time;
-      window.window[static_cast<std::size_t>(i)] = smoother->window().epochs[static_cast<std::size_t>(i)].x;
-    }
+    se::record_window(*smoother, window);
     largest = std::max(largest, window_gap(window, states, r.settings.dt));
   }
   EXPECT_EQ(smoother->window().size, se::kLag);
