@@ -97,7 +97,7 @@ struct BodyDirection {
 };
 static_assert(MeasurementModel<BodyDirection, Attitude, 6>);
 
-using Filter = Eskf<GyroAttitude, ChiSquareGate>;
+using Filter = Eskf<GyroAttitude, policies::ChiSquareGate>;
 
 struct Settings {
   std::uint64_t seed = 1;
@@ -144,12 +144,8 @@ inline Run run(const Settings& s = {}) {
   out.initial.cov.setZero();
   out.initial.cov.topLeftCorner<3, 3>().diagonal().setConstant(4.0 * e0 * e0);
   out.initial.cov.bottomRightCorner<3, 3>().diagonal().setConstant(0.03 * 0.03);
-  Filter filter(out.model, out.initial, FilterOptions{}, ChiSquareGate(0.999));
+  Filter filter(out.model, out.initial, FilterOptions{}, policies::ChiSquareGate(0.999));
 
-  auto normal3 = [&rng] {  // three draws in this order (a function's arguments have none)
-    const double a = rng.normal(), b = rng.normal(), c = rng.normal();
-    return Vector<3>(a, b, c);
-  };
   const int steps = static_cast<int>(std::lround(s.duration_s / s.imu_dt));
   const double gyro_sigma = out.model.gyro_noise_density / std::sqrt(s.imu_dt);
   out.epochs.reserve(static_cast<std::size_t>(steps));
@@ -159,12 +155,12 @@ inline Run run(const Settings& s = {}) {
     const double tm = e.t - 0.5 * s.imu_dt;  // the body turns at this rate over the step
     const Vector<3> rate(0.3 * std::sin(0.5 * tm), 0.2 * std::cos(0.3 * tm), 0.5);
     truth = (truth * so3::exp_quat(rate * s.imu_dt)).normalized();
-    e.gyro = rate + s.true_bias + gyro_sigma * normal3();
+    e.gyro = rate + s.true_bias + gyro_sigma * rng.normals<3>();
     e.predicted = filter.predict(e.gyro, s.imu_dt);
     if (k % s.steps_per_fix == 0) {
       e.has_fix = true;
-      e.up = truth.conjugate() * out.up.world + out.up.sigma * normal3();
-      e.north = truth.conjugate() * out.north.world + out.north.sigma * normal3();
+      e.up = truth.conjugate() * out.up.world + out.up.sigma * rng.normals<3>();
+      e.north = truth.conjugate() * out.north.world + out.north.sigma * rng.normals<3>();
       e.up_updated = filter.update(out.up, e.up);
       e.north_updated = filter.update(out.north, e.north);
     }

@@ -84,7 +84,7 @@ struct RangeBearing {
 };
 static_assert(MeasurementModel<RangeBearing, Vector<L::size>, L::size>);
 
-using Filter = Ekf<ConstantVelocity, ChiSquareGate>;
+using Filter = Ekf<ConstantVelocity, policies::ChiSquareGate>;
 
 struct Settings {
   std::uint64_t seed = 1;
@@ -123,7 +123,7 @@ inline Run run(const Settings& s = {}) {
   out.settings = s;
   out.initial.mean << 20.0, 10.0, 0.0, 0.0;  // a first guess: about where the target is, at rest
   out.initial.cov = Vector<4>(4.0, 4.0, 4.0, 4.0).asDiagonal();
-  Filter filter(out.model, out.initial, FilterOptions{}, ChiSquareGate(s.gate_probability));
+  Filter filter(out.model, out.initial, FilterOptions{}, policies::ChiSquareGate(s.gate_probability));
 
   sim::Rng rng(s.seed);
   Vector<4> truth(20.0, 10.0, 1.0, -0.5);

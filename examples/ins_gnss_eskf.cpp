@@ -39,7 +39,7 @@ int main(int argc, char** argv) {
   L::cov<"theta">(belief.cov).diagonal().setConstant(std::pow(3.0 * M_PI / 180.0, 2));
   L::cov<"bg">(belief.cov).diagonal().setConstant(std::pow(config.imu.gyro_bias_sigma, 2));
   L::cov<"ba">(belief.cov).diagonal().setConstant(std::pow(config.imu.accel_bias_sigma, 2));
-  Eskf<models::Ins15Model, ChiSquareGate> filter(model, belief, {}, ChiSquareGate(0.999));
+  Eskf<models::Ins15Model, policies::ChiSquareGate> filter(model, belief, {}, policies::ChiSquareGate(0.999));
   filter.set_time(drive.imu.front().t);
 
   double sq_err[3] = {0, 0, 0};

@@ -95,11 +95,11 @@ inline std::vector<Verdict> run() {
     Verdict v;
     v.range = r;
     // Non-finite features are refused with a status, nothing computed.
-    if (classify::svm_predict(model, Eigen::Vector2d(r.range_rate, r.speed), v.svm) != classify::SvmStatus::ok) continue;
+    if (!classify::svm_predict(model, Eigen::Vector2d(r.range_rate, r.speed), v.svm)) continue;
     v.p1 = v.svm.probabilities[static_cast<std::size_t>(nlos_index)];
     v.p2 = consistency.nlos_probability(r.range_change, r.travelled);
     v.ds = classify::combine_probabilities(v.p1, v.p2);
-    v.nlos = v.ds.status == classify::DsStatus::ok && decide(v.ds.nlos_belief());
+    v.nlos = v.ds.status.accepted() && decide(v.ds.nlos_belief());
     out.push_back(v);
   }
   return out;

@@ -99,20 +99,20 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     prior.cov = A * A.transpose();  // a covariance when finite
   }
   const bool gated = (mode & 4) != 0;
-  const ChiSquareGate gate(0.99);
+  const policies::ChiSquareGate gate(0.99);
 
   models::LinearMeasurement<2, 4> lin;
   lin.H = num.matrix<2, 4>();
   lin.R = num.matrix<2, 2>();
   const Vector<2> z2 = num.matrix<2, 1>();
-  if (gated) update(lin, prior, z2, gate); else update(lin, prior, z2, NoGate{});
+  if (gated) update(lin, prior, z2, gate); else update(lin, prior, z2, policies::NoGate{});
 
   using L = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>>;
   models::RangeToPoint<L, 2> range;
   range.anchor = num.matrix<2, 1>();
   range.sigma = num.next();
   const Vector<1> z1 = num.matrix<1, 1>();
-  if (gated) update(range, prior, z1, gate); else update(range, prior, z1, NoGate{});
+  if (gated) update(range, prior, z1, gate); else update(range, prior, z1, policies::NoGate{});
 
   models::LinearProcess<4> process;
   process.F = num.matrix<4, 4>();

@@ -163,7 +163,8 @@ inline NlosSvmBenchModel build_nlos_svm_bench_model(const std::string& cache_pat
     double dec = 0.0, prob[2];
     svm_predict_values(fx.libsvm, fx.nodes[i].data(), &dec);
     svm_predict_probability(fx.libsvm, fx.nodes[i].data(), prob);
-    classify::svm_predict(fx.ours, fx.inputs[i], out);
+    if (!classify::svm_predict(fx.ours, fx.inputs[i], out))
+      throw std::runtime_error("ours refused benchmark input " + std::to_string(i));
     if (std::abs(out.decision_values[0] - dec) > 1e-9 * std::max(1.0, std::abs(dec)) || std::abs(out.probabilities[0] - prob[0]) > 1e-6)
       throw std::runtime_error("ours and libsvm disagree on benchmark input " + std::to_string(i));
   }

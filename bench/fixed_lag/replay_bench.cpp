@@ -106,7 +106,7 @@ BENCHMARK(FixedLag_Replay10min<nu::RangeSmoother<>>)->Name("FixedLag/Replay10min
 // (calibrated_ekf.hpp: 8 anchor-bias slots), and the latter with its 0.9 s fixed-lag output.
 BENCHMARK(FixedLag_Replay10min<nu::RangeEkf<>>)->Name("FixedLag/EkfReplay10min")->Unit(benchmark::kMillisecond);
 BENCHMARK(FixedLag_Replay10min<nu::CalibratedRangeEkf<>>)->Name("FixedLag/CalibratedEkfReplay10min")->Unit(benchmark::kMillisecond);
-BENCHMARK(FixedLag_Replay10min<nu::CalibratedRangeEkf<ChiSquareGate, true>>)
+BENCHMARK(FixedLag_Replay10min<nu::CalibratedRangeEkf<policies::ChiSquareGate, true>>)
     ->Name("FixedLag/CalibratedEkfLagReplay10min")
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(FixedLag_ImuReplay10min<nu::ImuRangeSmoother<>>)->Name("FixedLag/ImuReplay10min")->Unit(benchmark::kMillisecond);

@@ -63,7 +63,7 @@ void GnssUpdate15(benchmark::State& state) {
   models::GnssGeodeticPosition<models::NavState> gnss;
   gnss.lever_arm = Eigen::Vector3d(0.3, -0.1, -1.2);
   gnss.R = models::geodetic_position_noise(prior.nominal.get<"p">(), Eigen::Vector3d(4.0, 4.0, 9.0).asDiagonal());
-  const ChiSquareGate gate(0.999);
+  const policies::ChiSquareGate gate(0.999);
   const Vector<3> z = earth::GeodeticRetraction::inject(gnss.predict(prior.nominal, nullptr), Eigen::Vector3d(1.5, -2.0, 0.8));
   {
     eskf::Belief<Nav15> b = prior;
@@ -89,7 +89,7 @@ RtsRecorder<Nav15> recorded_run(int epochs) {
   rec.reserve(static_cast<std::size_t>(epochs) + 1);
   rec.start(0.0, b);
   models::GnssGeodeticPosition<models::NavState> gnss;
-  const ChiSquareGate gate(0.999);
+  const policies::ChiSquareGate gate(0.999);
   int k = 0;
   for (int e = 1; e <= epochs; ++e) {
     for (int j = 0; j < 10; ++j, ++k) {

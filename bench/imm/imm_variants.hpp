@@ -38,9 +38,9 @@ inline M mode_model(double accel_density) {
 }
 
 inline auto make_imm(const Setup& s) {
-  auto modes = hana::make_tuple(imm::make_mode(mode_model(0.01), imm::AcceptsAll{}, ChiSquareGate(0.9999)),
-                                imm::make_mode(mode_model(0.02), imm::AcceptsAll{}, ChiSquareGate(0.9999)),
-                                imm::make_mode(mode_model(0.05), imm::AcceptsAll{}, ChiSquareGate(0.9999)));
+  auto modes = hana::make_tuple(imm::make_mode(mode_model(0.01), imm::AcceptsAll{}, policies::ChiSquareGate(0.9999)),
+                                imm::make_mode(mode_model(0.02), imm::AcceptsAll{}, policies::ChiSquareGate(0.9999)),
+                                imm::make_mode(mode_model(0.05), imm::AcceptsAll{}, policies::ChiSquareGate(0.9999)));
   return imm::Imm(policies::FixedTransition<3>(policies::sticky_transition<3>(0.95)), modes, s.init,
                   Vector<3>::Constant(1.0 / 3.0));
 }
@@ -60,11 +60,11 @@ void imm_step(Imm& f, const Setup& s, double& t, Keep&& keep) {
 }
 
 struct ThreeEskf {
-  Eskf<M, ChiSquareGate> a, b, c;
+  Eskf<M, policies::ChiSquareGate> a, b, c;
   explicit ThreeEskf(const Setup& s)
-      : a(mode_model(0.01), s.init, {}, ChiSquareGate(0.9999)),
-        b(mode_model(0.02), s.init, {}, ChiSquareGate(0.9999)),
-        c(mode_model(0.05), s.init, {}, ChiSquareGate(0.9999)) {}
+      : a(mode_model(0.01), s.init, {}, policies::ChiSquareGate(0.9999)),
+        b(mode_model(0.02), s.init, {}, policies::ChiSquareGate(0.9999)),
+        c(mode_model(0.05), s.init, {}, policies::ChiSquareGate(0.9999)) {}
 };
 
 /// The same predictions and updates by three independent ESKFs.

@@ -11,11 +11,12 @@
 namespace {
 
 using namespace ctxfuse::classify;
+using ctxfuse::Problem;
 
 TEST(DempsterShafer, PaperFormTwoSources) {
   // p1 = 0.9, p2 = 0.7: K = 0.63 + 0.03 = 0.66, R = 0.63 / 0.66
   const auto r = combine_probabilities(0.9, 0.7);
-  EXPECT_EQ(r.status, DsStatus::ok);
+  EXPECT_TRUE(r.status.accepted());
   EXPECT_NEAR(r.nlos_belief(), 0.63 / 0.66, 1e-15);
   EXPECT_NEAR(r.mass.los, 0.03 / 0.66, 1e-15);
   EXPECT_NEAR(r.conflict, 0.34, 1e-15);
@@ -52,19 +53,19 @@ TEST(DempsterShafer, MassOnWholeFrame) {
 
 TEST(DempsterShafer, TotalConflictIsReportedNotDivided) {
   const auto r = combine_probabilities(1.0, 0.0);
-  EXPECT_EQ(r.status, DsStatus::total_conflict);
+  EXPECT_EQ(r.status.problem, Problem::total_conflict);
   EXPECT_EQ(r.conflict, 1.0);
   EXPECT_TRUE(std::isfinite(r.mass.nlos));
   EXPECT_EQ(r.mass.either, 1.0);
   const std::array<BinaryMass, 3> s{BinaryMass::from_probability(0.7), BinaryMass::from_probability(1.0),
                                     BinaryMass::from_probability(0.0)};
-  EXPECT_EQ(combine(std::span<const BinaryMass>(s)).status, DsStatus::total_conflict);
+  EXPECT_EQ(combine(std::span<const BinaryMass>(s)).status.problem, Problem::total_conflict);
 }
 
 TEST(DempsterShafer, InvalidMassesAreRejected) {
-  EXPECT_EQ(combine_probabilities(std::nan(""), 0.5).status, DsStatus::invalid_mass);
-  EXPECT_EQ(combine_probabilities(1.5, 0.5).status, DsStatus::invalid_mass);
-  EXPECT_EQ(combine(BinaryMass{0.5, 0.5, 0.5}, BinaryMass{0.5, 0.5, 0.0}).status, DsStatus::invalid_mass);
+  EXPECT_EQ(combine_probabilities(std::nan(""), 0.5).status.problem, Problem::invalid_mass);
+  EXPECT_EQ(combine_probabilities(1.5, 0.5).status.problem, Problem::invalid_mass);
+  EXPECT_EQ(combine(BinaryMass{0.5, 0.5, 0.5}, BinaryMass{0.5, 0.5, 0.0}).status.problem, Problem::invalid_mass);
 }
 
 TEST(ConsistencyModel, PaperStepsAtOneTwoThreeSigma) {

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -13,6 +14,7 @@
 namespace {
 
 using ctxfuse::classify::GaussianHmm;
+using ctxfuse::Problem;
 using Hmm = GaussianHmm<3, 2>;
 using Obs = Hmm::Observation;
 using Cov = Hmm::Covariance;
@@ -129,8 +131,10 @@ TEST(GaussianHmm, ForwardFilterMatchesBruteForceMarginals) {
   const Hmm hmm = build(kModel);
   const auto x = test_observations();
   ctxfuse::classify::HmmForwardFilter<3, 2> filter(hmm);
+  double previous_evidence = 1.0;  // p(x_1..t-1); 1 before the first step
   for (int t = 0; t < 6; ++t) {
-    ASSERT_EQ(filter.step(x[t]), ctxfuse::classify::FilterStatus::ok);
+    const ctxfuse::Status st = filter.step(x[t]);
+    ASSERT_TRUE(st.accepted());
     const std::vector<Obs> prefix(x.begin(), x.begin() + t + 1);
     std::array<double, 3> marginal{};
     double evidence = 0.0;
@@ -145,23 +149,43 @@ TEST(GaussianHmm, ForwardFilterMatchesBruteForceMarginals) {
     const auto post = filter.posterior();
     for (int k = 0; k < 3; ++k) EXPECT_NEAR(post[k], marginal[k] / evidence, 1e-12) << "t=" << t;
     EXPECT_NEAR(filter.log_likelihood(), std::log(evidence), 1e-9);
+    // The step's Status carries its own evidence log p(x_t | x_1..t-1).
+    EXPECT_NEAR(st.log_likelihood, std::log(evidence / previous_evidence), 1e-9) << "t=" << t;
+    previous_evidence = evidence;
   }
 }
 
 TEST(GaussianHmm, ForwardFilterRejectsNonFiniteObservationAndKeepsState) {
   const Hmm hmm = build(kModel);
   ctxfuse::classify::HmmForwardFilter<3, 2> filter(hmm);
-  ASSERT_EQ(filter.step(test_observations()[0]), ctxfuse::classify::FilterStatus::ok);
+  ASSERT_TRUE(filter.step(test_observations()[0]).accepted());
   const auto before = filter.log_posterior();
   Obs bad;
   bad << std::nan(""), 1.0;
-  EXPECT_EQ(filter.step(bad), ctxfuse::classify::FilterStatus::non_finite_observation);
+  EXPECT_EQ(filter.step(bad).problem, Problem::non_finite_measurement);
   EXPECT_EQ(filter.log_posterior(), before);
   EXPECT_EQ(filter.steps(), 1u);
   Obs far;  // the squared Mahalanobis distance overflows: no state can have emitted this
   far << 1e200, -1e200;
-  EXPECT_EQ(filter.step(far), ctxfuse::classify::FilterStatus::zero_likelihood);
+  const ctxfuse::Status st = filter.step(far);
+  EXPECT_EQ(st.outcome, ctxfuse::Outcome::numerical_failure);
+  EXPECT_EQ(st.problem, Problem::zero_likelihood);
   EXPECT_EQ(filter.log_posterior(), before);
+}
+
+TEST(GaussianHmm, ViterbiRefusesANonFiniteObservation) {
+  const Hmm hmm = build(kModel);
+  std::vector<Obs> x = test_observations();
+  x[3][1] = std::numeric_limits<double>::infinity();
+  const auto v = ctxfuse::classify::viterbi<3, 2>(hmm, x);
+  EXPECT_EQ(v.status.outcome, ctxfuse::Outcome::invalid_input);
+  EXPECT_EQ(v.status.problem, Problem::non_finite_measurement);
+  EXPECT_EQ(v.refused_at, 3u);
+  EXPECT_TRUE(v.path.empty());
+  x[3][1] = 30.0;
+  const auto repaired = ctxfuse::classify::viterbi<3, 2>(hmm, x);
+  EXPECT_TRUE(repaired.status.accepted());
+  EXPECT_EQ(repaired.path.size(), x.size());
 }
 
 TEST(GaussianHmm, LogDomainSurvivesLongSequences) {
@@ -169,7 +193,7 @@ TEST(GaussianHmm, LogDomainSurvivesLongSequences) {
   ctxfuse::classify::HmmForwardFilter<3, 2> filter(hmm);
   Obs x;
   x << 4.0, 25.0;
-  for (int t = 0; t < 5000; ++t) ASSERT_EQ(filter.step(x), ctxfuse::classify::FilterStatus::ok);
+  for (int t = 0; t < 5000; ++t) ASSERT_TRUE(filter.step(x).accepted());
   EXPECT_GT(filter.posterior()[2], 0.99);
   EXPECT_TRUE(std::isfinite(filter.log_likelihood()));
   EXPECT_LT(filter.log_likelihood(), -1000.0);  // far below what a linear-domain product can hold

@@ -57,7 +57,7 @@ TEST(NoAllocation, PerSampleSteps) {
   const long before = g_allocations.load();
   double sink = 0.0;
   for (int t = 0; t < 200; ++t) {
-    ASSERT_EQ(filter.step(Eigen::Vector2d(4.0 + t % 17, 25.0 + t % 13)), classify::FilterStatus::ok);
+    ASSERT_TRUE(filter.step(Eigen::Vector2d(4.0 + t % 17, 25.0 + t % 13)).accepted());
     const int region = filter.most_probable();
     counter.add(vote({region, (region + t) % 3}));
     sink += counter.matrix()(0, 0);
@@ -68,12 +68,12 @@ TEST(NoAllocation, PerSampleSteps) {
                                                     classify::BinaryMass{0.2, 0.3, 0.5}};
     sink += classify::combine(std::span<const classify::BinaryMass>(three)).conflict;
     features::GnssSceneFeatures f;
-    ASSERT_EQ(scene.push({double(t), sats}, f), features::GnssFeatureStatus::ok);
+    ASSERT_TRUE(scene.push({double(t), sats}, f).accepted());
     sink += f[0];
     features::NlosFeatures nf;
-    nlos.push({0.1 * t, 10.0 + 0.01 * t, -80, -81}, 1.0, nf);
+    ASSERT_TRUE(nlos.push({0.1 * t, 10.0 + 0.01 * t, -80, -81}, 1.0, nf).accepted());
     features::RangeWindowFeatures<64>::Output wo;
-    window.push(0.01 * t, -80, -81, wo);
+    ASSERT_TRUE(window.push(0.01 * t, -80, -81, wo).accepted());
     sink += wo.residual_mean_m;
   }
   EXPECT_EQ(g_allocations.load() - before, 0);

@@ -98,8 +98,8 @@ BoundStats check_bound(const SvmModel<Dim, MaxClasses>& model, int queries, unsi
       xs[f] = q % 4 == 3 ? model.support_vectors(q % model.num_support_vectors(), f) + 0.05 * u(rng) : spread * u(rng);
     const Eigen::Matrix<double, Dim, 1> x = xs.cwiseProduct(model.input_std) + model.input_mean;
     typename SvmFastRbf<Dim, MaxClasses>::Values values{}, bounds{};
-    EXPECT_EQ(fast.fast_values(x, values, bounds), SvmStatus::ok);
-    EXPECT_EQ(svm_decision(model, x, exact), SvmStatus::ok);
+    EXPECT_TRUE(fast.fast_values(x, values, bounds).accepted());
+    EXPECT_TRUE(svm_decision(model, x, exact).accepted());
     for (int m = 0; m < model.num_machines(); ++m) {
       const auto i = static_cast<std::size_t>(m);
       const double error = std::abs(values[i] - exact.decision_values[i]);
@@ -229,11 +229,12 @@ void compare_with_libsvm(const Trained& t, int classes, std::vector<Eigen::Vecto
   SvmPrediction<MaxClasses> a, b;
   for (std::size_t i = 0; i + 1 < test_count && points.size() < test_count + 600; i += 2) {
     Eigen::Vector2d lo = points[i], hi = points[i + 1];
-    svm_decision(model, lo, a), svm_decision(model, hi, b);
+    ASSERT_TRUE(svm_decision(model, lo, a).accepted());
+    ASSERT_TRUE(svm_decision(model, hi, b).accepted());
     if (a.label == b.label) continue;
     for (int step = 0; step < 45; ++step) {
       const Eigen::Vector2d mid = (lo + hi) / 2;
-      svm_decision(model, mid, b);
+      ASSERT_TRUE(svm_decision(model, mid, b).accepted());
       (b.label == a.label ? lo : hi) = mid;
       if (step == 29 || step == 44) points.push_back(lo);
     }
@@ -249,9 +250,10 @@ void compare_with_libsvm(const Trained& t, int classes, std::vector<Eigen::Vecto
     const double prob_label = svm_predict_probability(t.libsvm, node.data(), prob.data());
     SvmPrediction<MaxClasses> exact_dec, exact_prob, fast_dec, fast_prob;
     SvmFastReport r1, r2;
-    svm_decision(model, x, exact_dec), svm_predict(model, x, exact_prob);
-    ASSERT_EQ(fast.decision(x, fast_dec, &r1), SvmStatus::ok);
-    ASSERT_EQ(fast.predict(x, fast_prob, &r2), SvmStatus::ok);
+    ASSERT_TRUE(svm_decision(model, x, exact_dec).accepted());
+    ASSERT_TRUE(svm_predict(model, x, exact_prob).accepted());
+    ASSERT_TRUE(fast.decision(x, fast_dec, &r1).accepted());
+    ASSERT_TRUE(fast.predict(x, fast_prob, &r2).accepted());
     fast_count += r1.fast + r2.fast;
     fast_decisions += r1.fast, fast_probabilities += r2.fast;
     fallbacks += r1.fallback + r2.fallback;
@@ -354,10 +356,10 @@ TEST(SvmFastRbf, OneVsRestMatchesExactPath) {
     const Eigen::Vector2d x(u(rng), u(rng));
     SvmPrediction<4> exact_dec, exact_prob, fast_dec, fast_prob;
     SvmFastReport r1, r2;
-    ASSERT_EQ(svm_decision(model, x, exact_dec), SvmStatus::ok);
-    ASSERT_EQ(svm_predict(model, x, exact_prob), SvmStatus::ok);
-    ASSERT_EQ(fast.decision(x, fast_dec, &r1), SvmStatus::ok);
-    ASSERT_EQ(fast.predict(x, fast_prob, &r2), SvmStatus::ok);
+    ASSERT_TRUE(svm_decision(model, x, exact_dec).accepted());
+    ASSERT_TRUE(svm_predict(model, x, exact_prob).accepted());
+    ASSERT_TRUE(fast.decision(x, fast_dec, &r1).accepted());
+    ASSERT_TRUE(fast.predict(x, fast_prob, &r2).accepted());
     fast_decisions += r1.fast, fast_probabilities += r2.fast, fallbacks += r1.fallback + r2.fallback;
     EXPECT_EQ(fast_dec.label, exact_dec.label) << q;
     EXPECT_EQ(fast_prob.label, exact_prob.label) << q;
@@ -382,19 +384,19 @@ TEST(SvmFastRbf, BadInputLikeSvmPredict) {
     sentinel.decision_values.fill(-7.0);
     sentinel.probabilities.fill(0.25);
     out = sentinel;
-    const SvmStatus expected = svm_predict(model, x, reference);
-    EXPECT_NE(expected, SvmStatus::ok);
-    EXPECT_EQ(fast.predict(x, out), expected);
-    EXPECT_EQ(fast.decision(x, out), expected);
+    const ctxfuse::Status expected = svm_predict(model, x, reference);
+    EXPECT_FALSE(expected.accepted());
+    EXPECT_EQ(fast.predict(x, out).problem, expected.problem);
+    EXPECT_EQ(fast.decision(x, out).problem, expected.problem);
     typename SvmFastRbf<2, 4>::Values v{}, e{};
-    EXPECT_EQ(fast.fast_values(x, v, e), expected);
+    EXPECT_EQ(fast.fast_values(x, v, e).problem, expected.problem);
     EXPECT_TRUE(same(out, sentinel));
   }
   // Large but valid inputs: the same answer as the exact path.
   for (const Eigen::Vector2d& x : {Eigen::Vector2d(1e150, -1e150), Eigen::Vector2d(1e6, 3.0), Eigen::Vector2d(40.0, 0.0)}) {
     SvmPrediction<4> exact, out;
-    ASSERT_EQ(svm_predict(model, x, exact), SvmStatus::ok);
-    ASSERT_EQ(fast.predict(x, out), SvmStatus::ok);
+    ASSERT_TRUE(svm_predict(model, x, exact).accepted());
+    ASSERT_TRUE(fast.predict(x, out).accepted());
     EXPECT_EQ(out.label, exact.label);
     for (int c = 0; c < 3; ++c)
       EXPECT_NEAR(out.probabilities[static_cast<std::size_t>(c)], exact.probabilities[static_cast<std::size_t>(c)], 1e-9);
@@ -410,19 +412,20 @@ TEST(SvmFastRbf, PredictionNeverAllocates) {
     ASSERT_TRUE(fast.plan().fast);
     SvmPrediction<4> out;
     SvmFastReport report;
-    int fast_answers = 0, fallbacks = 0;
+    int fast_answers = 0, fallbacks = 0, refused = 0;
     const long uses = ctxfuse::test::heap_uses([&] {
       for (int i = 0; i < 400; ++i) {
         const Eigen::Vector2d x(0.02 * i - 4.0, 2.0 - 0.011 * i);
         for (const auto* evaluator : {&fast, &fallback}) {
-          evaluator->predict(x, out, &report);
+          refused += !evaluator->predict(x, out, &report).accepted();
           fast_answers += report.fast, fallbacks += report.fallback;
-          evaluator->decision(x, out, &report);
+          refused += !evaluator->decision(x, out, &report).accepted();
           fast_answers += report.fast, fallbacks += report.fallback;
         }
       }
     });
     EXPECT_EQ(uses, 0) << classes;
+    EXPECT_EQ(refused, 0);
     EXPECT_GT(fast_answers, 0);  // both paths ran
     EXPECT_GT(fallbacks, 0);
   }
@@ -450,16 +453,16 @@ TEST(SvmFastRbf, AutomaticChoice) {
     const Eigen::Vector2d x(0.1 * i - 2.5, 0.05 * i);
     SvmPrediction<4> expected, out;
     SvmFastReport report;
-    svm_predict(small, x, expected);
-    automatic_small.predict(x, out, &report);
+    ASSERT_TRUE(svm_predict(small, x, expected).accepted());
+    ASSERT_TRUE(automatic_small.predict(x, out, &report).accepted());
     EXPECT_FALSE(report.fast);
     EXPECT_FALSE(report.fallback);
     EXPECT_TRUE(same(out, expected));
-    svm_predict(large, x, expected);
-    forced_exact.predict(x, out);
+    ASSERT_TRUE(svm_predict(large, x, expected).accepted());
+    ASSERT_TRUE(forced_exact.predict(x, out).accepted());
     EXPECT_TRUE(same(out, expected));
-    linear_fast.predict(x, out);
-    svm_predict(linear, x, expected);
+    ASSERT_TRUE(linear_fast.predict(x, out).accepted());
+    ASSERT_TRUE(svm_predict(linear, x, expected).accepted());
     EXPECT_TRUE(same(out, expected));
   }
 }

@@ -97,7 +97,7 @@ double boundary(const SvmModel<1>& model) {
   SvmPrediction<8> p;
   double x = -3.0;
   for (; x < 6.0; x += 0.001) {
-    svm_predict(model, Eigen::Matrix<double, 1, 1>(x), p);
+    EXPECT_TRUE(svm_predict(model, Eigen::Matrix<double, 1, 1>(x), p).accepted());
     if (p.label == 1) break;
   }
   return x;

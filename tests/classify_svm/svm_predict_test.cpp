@@ -17,6 +17,7 @@
 namespace {
 
 using namespace ctxfuse::classify;
+using ctxfuse::Problem;
 
 SvmModel<2, 3> two_sv_model(SvmKernel kernel) {
   SvmModel<2, 3> m;
@@ -39,7 +40,7 @@ TEST(SvmPredict, RbfDecisionValueMatchesHandSum) {
   // |x - sv1|^2 = 0.49 + 5.76 = 6.25, |x - sv2|^2 = 1.69 + 0.81 = 2.5
   const double expected = 0.75 * std::exp(-0.5 * 6.25) - 1.25 * std::exp(-0.5 * 2.5) - 0.1;
   SvmPrediction<3> out;
-  ASSERT_EQ(svm_decision(m, x, out), SvmStatus::ok);
+  ASSERT_TRUE(svm_decision(m, x, out).accepted());
   EXPECT_NEAR(out.decision_values[0], expected, 1e-15);
   EXPECT_EQ(out.label, expected > 0 ? 1 : -1);
   EXPECT_EQ(out.num_machines, 1);
@@ -50,7 +51,7 @@ TEST(SvmPredict, LinearDecisionValueMatchesHandSum) {
   const Eigen::Vector2d x(0.3, -0.4);
   const double expected = 0.75 * (0.3 * 1.0 - 0.4 * 2.0) - 1.25 * (-0.3 - 0.4 * 0.5) - 0.1;
   SvmPrediction<3> out;
-  ASSERT_EQ(svm_decision(m, x, out), SvmStatus::ok);
+  ASSERT_TRUE(svm_decision(m, x, out).accepted());
   EXPECT_NEAR(out.decision_values[0], expected, 1e-15);
   EXPECT_EQ(out.label, 1);  // expected = 0.15 > 0
 }
@@ -61,7 +62,7 @@ TEST(SvmPredict, ManySupportVectorsSpanSeveralKernelBlocks) {
   const Eigen::Vector3d x(0.5, -1.0, 2.0);
   const Eigen::Vector3d xs = (x - m.input_mean).cwiseQuotient(m.input_std);
   SvmPrediction<8> out;
-  ASSERT_EQ(svm_decision(m, x, out), SvmStatus::ok);
+  ASSERT_TRUE(svm_decision(m, x, out).accepted());
   for (int p = 0; p < 3; ++p) {
     double sum = 0.0;
     for (int s = 0; s < 1000; ++s) sum += m.coefficients(p, s) * std::exp(-m.gamma * (xs - m.support_vectors.row(s).transpose()).squaredNorm());
@@ -77,8 +78,8 @@ TEST(SvmPredict, StandardisationIsAppliedBeforeTheKernel) {
   const auto plain = two_sv_model(SvmKernel::rbf);
   const Eigen::Vector2d raw(11.2, -3.2);
   SvmPrediction<3> a, b;
-  svm_decision(scaled, raw, a);
-  svm_decision(plain, Eigen::Vector2d(1.2 / 4.0, -0.2 / 0.5), b);
+  ASSERT_TRUE(svm_decision(scaled, raw, a).accepted());
+  ASSERT_TRUE(svm_decision(plain, Eigen::Vector2d(1.2 / 4.0, -0.2 / 0.5), b).accepted());
   EXPECT_NEAR(a.decision_values[0], b.decision_values[0], 1e-15);
 }
 
@@ -160,12 +161,12 @@ TEST(SvmPredict, OneVsOneVoteBreaksTiesTowardsTheFirstClass) {
   m.rho = {-1.0, 1.0, -1.0};
   finalize_svm_model(m);
   SvmPrediction<3> out;
-  ASSERT_EQ(svm_decision(m, Eigen::Matrix<double, 1, 1>(0.0), out), SvmStatus::ok);
+  ASSERT_TRUE(svm_decision(m, Eigen::Matrix<double, 1, 1>(0.0), out).accepted());
   EXPECT_EQ(out.class_index, 0);
   EXPECT_EQ(out.label, 4);
   m.rho = {1.0, 1.0, -1.0};  // now 1 beats 0, 2 beats 0, 1 beats 2: class 1 has two votes
   finalize_svm_model(m);
-  svm_decision(m, Eigen::Matrix<double, 1, 1>(0.0), out);
+  ASSERT_TRUE(svm_decision(m, Eigen::Matrix<double, 1, 1>(0.0), out).accepted());
   EXPECT_EQ(out.label, 5);
 }
 
@@ -173,7 +174,7 @@ TEST(SvmPredict, OneVsRestPicksLargestDecisionAndNormalisesSigmoids) {
   auto m = ctxfuse::test::random_model<2, 4>(SvmKernel::rbf, SvmMulticlass::one_vs_rest, 4, 30, true, 9);
   const Eigen::Vector2d x(0.2, 1.1);
   SvmPrediction<4> out;
-  ASSERT_EQ(svm_predict(m, x, out), SvmStatus::ok);
+  ASSERT_TRUE(svm_predict(m, x, out).accepted());
   ASSERT_EQ(out.num_machines, 4);
   std::array<double, 4> sig{};
   double total = 0.0;
@@ -183,7 +184,7 @@ TEST(SvmPredict, OneVsRestPicksLargestDecisionAndNormalisesSigmoids) {
   }
   for (std::size_t i = 0; i < 4; ++i) EXPECT_NEAR(out.probabilities[i], sig[i] / total, 1e-14);
   SvmPrediction<4> decision_only;
-  svm_decision(m, x, decision_only);
+  ASSERT_TRUE(svm_decision(m, x, decision_only).accepted());
   const auto best = std::max_element(out.decision_values.begin(), out.decision_values.begin() + 4) - out.decision_values.begin();
   EXPECT_EQ(decision_only.class_index, best);
   EXPECT_FALSE(decision_only.has_probabilities);
@@ -195,12 +196,13 @@ TEST(SvmPredict, BadInputLeavesOutputUntouched) {
   out.label = 77;
   out.decision_values[0] = 123.0;
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_EQ(svm_predict(m, Eigen::Vector2d(nan, 0.0), out), SvmStatus::non_finite_input);
-  EXPECT_EQ(svm_predict(m, Eigen::Vector2d(0.0, std::numeric_limits<double>::infinity()), out), SvmStatus::non_finite_input);
-  EXPECT_EQ(svm_predict(m, Eigen::Vector2d(1e200, 0.0), out), SvmStatus::input_magnitude);
+  EXPECT_EQ(svm_predict(m, Eigen::Vector2d(nan, 0.0), out).problem, Problem::non_finite_features);
+  EXPECT_EQ(svm_predict(m, Eigen::Vector2d(0.0, std::numeric_limits<double>::infinity()), out).problem, Problem::non_finite_features);
+  EXPECT_EQ(svm_predict(m, Eigen::Vector2d(1e200, 0.0), out).problem, Problem::feature_magnitude);
   EXPECT_EQ(out.label, 77);
   EXPECT_EQ(out.decision_values[0], 123.0);
-  EXPECT_EQ(describe(SvmStatus::non_finite_input), "feature vector contains NaN or Inf");
+  EXPECT_EQ(describe(Problem::non_finite_features), "feature vector contains NaN or Inf");
+  EXPECT_EQ(svm_predict(m, Eigen::Vector2d(nan, 0.0), out).outcome, ctxfuse::Outcome::invalid_input);
 }
 
 TEST(SvmPredict, FinalizeRejectsInconsistentModels) {

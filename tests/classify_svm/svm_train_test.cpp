@@ -86,7 +86,7 @@ TEST(SvmTrain, CrossValidationEqualsBruteForceRefits) {
     SvmPrediction<8> out;
     for (std::size_t i = 0; i < folds.size(); ++i) {
       if (folds[i] != f) continue;
-      svm_predict(model, Eigen::Vector2d(x.row(static_cast<Eigen::Index>(i)).transpose()), out);
+      EXPECT_TRUE(svm_predict(model, Eigen::Vector2d(x.row(static_cast<Eigen::Index>(i)).transpose()), out).accepted());
       EXPECT_EQ(cv.predicted[i], out.label);
       correct += out.label == data.y[i] ? 1 : 0;
     }
@@ -122,9 +122,9 @@ TEST(SvmTrain, PsoTunedParametersBeatDefaultsOnBadlyScaledFeatures) {
   SvmPrediction<8> out;
   for (Eigen::Index i = 0; i < held_out.x.rows(); ++i) {
     const Eigen::Vector2d q = held_out.x.row(i).transpose();
-    svm_predict(default_model, q, out);
+    EXPECT_TRUE(svm_predict(default_model, q, out).accepted());
     default_right += out.label == held_out.y[static_cast<std::size_t>(i)];
-    svm_predict(tuned_model, q, out);
+    EXPECT_TRUE(svm_predict(tuned_model, q, out).accepted());
     tuned_right += out.label == held_out.y[static_cast<std::size_t>(i)];
   }
   EXPECT_GE(tuned_right, default_right + 60) << "default " << default_right << " tuned " << tuned_right << " of 300";
@@ -138,7 +138,7 @@ TEST(SvmTrain, ClassWeightRaisesRecallOfTheWeightedClass) {
     int n = 0;
     SvmPrediction<8> out;
     for (Eigen::Index i = 0; i < x.rows(); ++i) {
-      svm_predict(m, Eigen::Vector2d(x.row(i).transpose()), out);
+      EXPECT_TRUE(svm_predict(m, Eigen::Vector2d(x.row(i).transpose()), out).accepted());
       n += out.label == 1;
     }
     return n;

@@ -29,9 +29,9 @@ TEST(ChiSquare, QuantilesMatchStatisticalTables) {
 }
 
 TEST(ChiSquare, GateCachesTheQuantiles) {
-  const ChiSquareGate gate(0.99);
+  const policies::ChiSquareGate gate(0.99);
   for (int dof = 1; dof <= 20; ++dof) EXPECT_DOUBLE_EQ(gate.threshold(dof), chi_square_quantile(0.99, dof));
-  EXPECT_TRUE(std::isinf(NoGate{}.threshold(3)));
+  EXPECT_TRUE(std::isinf(policies::NoGate{}.threshold(3)));
 }
 
 TEST(Numerics, JosephEqualsShortFormAtTheOptimalGain) {

@@ -14,7 +14,7 @@
 #include "ctxfuse/filters/ekf.hpp"
 #include "ctxfuse/models/kinematic.hpp"
 #include "ctxfuse/sim/random.hpp"
-#include "support/standard_normal.hpp"
+#include "support/draw_start.hpp"
 
 namespace {
 using namespace ctxfuse;
@@ -68,7 +68,7 @@ Outcome monte_carlo(int runs, int steps, double true_psd, double assumed_psd) {
 
   Outcome out(static_cast<std::size_t>(steps));
   sim::Rng rng(20261123);
-  auto normal4 = [&] { return test::standard_normal<4>(rng); };
+  auto normal4 = [&] { return rng.normals<4>(); };
   for (int r = 0; r < runs; ++r) {
     const auto start = test::draw_start(Vector<4>(0.0, 0.0, 1.0, -0.5), prior_sd, rng);
     Vector<4> x = start.truth;
@@ -76,7 +76,7 @@ Outcome monte_carlo(int runs, int steps, double true_psd, double assumed_psd) {
     for (int k = 0; k < steps; ++k) {
       x = truth_model.predict(x, {}, dt, nullptr) + Q_chol * normal4();
       EXPECT_TRUE(f.predict({}, dt).accepted());
-      const Vector<2> z = L::get<"p">(x) + fix_sigma * test::standard_normal<2>(rng);
+      const Vector<2> z = L::get<"p">(x) + fix_sigma * rng.normals<2>();
       const auto status = f.update(fix, z);
       EXPECT_TRUE(status.accepted());
       out.nis.add(static_cast<std::size_t>(k), status.nis);

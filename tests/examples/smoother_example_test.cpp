@@ -154,8 +154,9 @@ TEST(SmootherExample, EveryStepIsAcceptedAndTheLaggedEstimateIsTheOldestInTheWin
   for (std::size_t k = 0; k < r.steps.size(); ++k) {
     ASSERT_TRUE(r.steps[k].smoothed) << k;
     EXPECT_EQ(r.steps[k].window_size, std::min<int>(static_cast<int>(k) + 2, se::kLag));
-    if (k + se::kLag - 1 < r.steps.size())  // epoch k's lagged estimate is K-1 steps later
+    if (k + se::kLag - 1 < r.steps.size()) {  // epoch k's lagged estimate is K-1 steps later
       EXPECT_DOUBLE_EQ(r.steps[k + se::kLag - 1].times[0], r.steps[k].t);
+    }
   }
 }
 

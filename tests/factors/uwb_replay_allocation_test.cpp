@@ -43,7 +43,7 @@ TEST(UwbReplayAllocation, TenMinutesThroughTheSmootherNeverAllocate) {
 TEST(UwbReplayAllocation, TenMinutesThroughTheCalibratedEkfAndItsLaggedOutputNeverAllocate) {
   const test::UwbReplay replay(10);
   const nu::Settings settings = test::UwbReplay::settings();
-  auto s = std::make_unique<nu::CalibratedRangeEkf<ChiSquareGate, true>>(settings);
+  auto s = std::make_unique<nu::CalibratedRangeEkf<policies::ChiSquareGate, true>>(settings);
   ASSERT_TRUE(s->start(0.0, replay.start_position(), replay.start_cov()).accepted());
   int refused = 0;
   double worst = 0.0, worst_lagged = 0.0, lag_min = 1e9, lag_max = 0.0;

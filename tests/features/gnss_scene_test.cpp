@@ -10,6 +10,7 @@
 namespace {
 
 using namespace ctxfuse::features;
+using ctxfuse::Problem;
 using F = GnssSceneFeature;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
@@ -48,7 +49,7 @@ TEST(GnssScene, FeaturesOfHandComputedEpochs) {
   GnssSceneFeatures f;
   // t = 0: three tracked satellites + one untracked; receiver PDOP 2.0.
   const std::vector<SatelliteObservation> e0{{1, 20, 10, 40}, {2, 40, 100, 44}, {3, 60, 300, 48}, {4, 50, 200, kNaN}};
-  ASSERT_EQ(ex.push({0.0, e0, 2.0}, f), GnssFeatureStatus::ok);
+  ASSERT_TRUE(ex.push({0.0, e0, 2.0}, f).accepted());
   EXPECT_EQ(f[F::satellite_count], 3);
   EXPECT_EQ(f[F::pdop], 2.0);
   EXPECT_DOUBLE_EQ(f[F::mean_cn0], 44.0);
@@ -61,7 +62,7 @@ TEST(GnssScene, FeaturesOfHandComputedEpochs) {
 
   // t = 1: satellite 1 at 42, 2 at 44, new satellite 5; PDOP 3.0.
   const std::vector<SatelliteObservation> e1{{1, 20, 10, 42}, {2, 40, 100, 44}, {5, 30, 190, 38}, {3, 60, 300, 50}};
-  ASSERT_EQ(ex.push({1.0, e1, 3.0}, f), GnssFeatureStatus::ok);
+  ASSERT_TRUE(ex.push({1.0, e1, 3.0}, f).accepted());
   EXPECT_EQ(f[F::satellite_count], 4);
   EXPECT_DOUBLE_EQ(f[F::mean_cn0], (42 + 44 + 38 + 50) / 4.0);
   EXPECT_DOUBLE_EQ(f[F::count_std], 0.5);   // counts {3, 4}
@@ -73,9 +74,9 @@ TEST(GnssScene, FeaturesOfHandComputedEpochs) {
   // t = 2, 3, 4: satellite 1 only (C/N0 44, 40, 40) -> sat1 history over the last 4 epochs:
   // t=1..4: {42, 44, 40, 40}, mean 41.5, population std sqrt((0.25+6.25+2.25+2.25)/4)
   const std::vector<SatelliteObservation> s44{{1, 20, 10, 44}}, s40{{1, 20, 10, 40}};
-  ASSERT_EQ(ex.push({2.0, s44}, f), GnssFeatureStatus::ok);
-  ASSERT_EQ(ex.push({3.0, s40}, f), GnssFeatureStatus::ok);
-  ASSERT_EQ(ex.push({4.0, s40}, f), GnssFeatureStatus::ok);
+  ASSERT_TRUE(ex.push({2.0, s44}, f).accepted());
+  ASSERT_TRUE(ex.push({3.0, s40}, f).accepted());
+  ASSERT_TRUE(ex.push({4.0, s40}, f).accepted());
   EXPECT_NEAR(f[F::mean_cn0_std], std::sqrt(11.0 / 4.0), 1e-12);
   // Window (0, 4]: epochs t = 1..4 with counts {4, 1, 1, 1}: mean 1.75, std sqrt(27/16)
   EXPECT_NEAR(f[F::count_std], std::sqrt((2.25 * 2.25 + 3 * 0.75 * 0.75) / 4.0), 1e-12);
@@ -89,24 +90,24 @@ TEST(GnssScene, IndoorEpochFillsAndBadInputLeavesStateUnchanged) {
   cfg.fill_value = -5.0;
   GnssSceneExtractor<4, 8> ex(cfg);
   GnssSceneFeatures f;
-  ASSERT_EQ(ex.push({0.0, {}}, f), GnssFeatureStatus::ok);
+  ASSERT_TRUE(ex.push({0.0, {}}, f).accepted());
   EXPECT_EQ(f[F::satellite_count], 0.0);
   for (int k = 1; k < kGnssSceneFeatureCount; ++k) EXPECT_EQ(f[k], -5.0) << k;
 
   const GnssSceneFeatures before = f;
   const std::vector<SatelliteObservation> ok{{1, 20, 10, 40}};
-  EXPECT_EQ(ex.push({0.0, ok}, f), GnssFeatureStatus::time_not_increasing);
-  EXPECT_EQ(ex.push({kNaN, ok}, f), GnssFeatureStatus::non_finite_time);
+  EXPECT_EQ(ex.push({0.0, ok}, f).problem, Problem::out_of_order_time);
+  EXPECT_EQ(ex.push({kNaN, ok}, f).problem, Problem::non_finite_time);
   const std::vector<SatelliteObservation> bad_el{{1, 95, 10, 40}}, bad_cn0{{1, 20, 10, -3}}, dup{{1, 20, 10, 40}, {1, 30, 50, 40}};
-  EXPECT_EQ(ex.push({1.0, bad_el}, f), GnssFeatureStatus::invalid_elevation);
-  EXPECT_EQ(ex.push({1.0, bad_cn0}, f), GnssFeatureStatus::invalid_cn0);
-  EXPECT_EQ(ex.push({1.0, dup}, f), GnssFeatureStatus::duplicate_satellite);
-  EXPECT_EQ(ex.push({1.0, ok, -2.0}, f), GnssFeatureStatus::invalid_pdop);
+  EXPECT_EQ(ex.push({1.0, bad_el}, f).problem, Problem::invalid_elevation);
+  EXPECT_EQ(ex.push({1.0, bad_cn0}, f).problem, Problem::invalid_cn0);
+  EXPECT_EQ(ex.push({1.0, dup}, f).problem, Problem::duplicate_satellite);
+  EXPECT_EQ(ex.push({1.0, ok, -2.0}, f).problem, Problem::invalid_dop);
   const std::vector<SatelliteObservation> five(5, SatelliteObservation{1, 20, 10, 40});
-  EXPECT_EQ(ex.push({1.0, five}, f), GnssFeatureStatus::too_many_satellites);
+  EXPECT_EQ(ex.push({1.0, five}, f).problem, Problem::measurement_count_above_capacity);
   EXPECT_EQ(f, before);
   // The rejected epochs left no trace: t = 1 is still accepted and its window holds {0, 1}.
-  ASSERT_EQ(ex.push({1.0, ok}, f), GnssFeatureStatus::ok);
+  ASSERT_TRUE(ex.push({1.0, ok}, f).accepted());
   EXPECT_DOUBLE_EQ(f[F::count_std], 0.5);
 }
 
@@ -114,19 +115,20 @@ TEST(GnssScene, BatchMatchesStreamingAndNamesTheBadEpoch) {
   const std::vector<SatelliteObservation> a{{1, 20, 10, 40}, {2, 40, 100, 44}}, b{{1, 20, 12, 41}};
   const std::vector<GnssEpoch> epochs{{0.0, a}, {1.0, b}, {2.0, a}};
   const auto batch = gnss_scene_features(std::span<const GnssEpoch>(epochs));
+  ASSERT_TRUE(batch.status.accepted());
+  ASSERT_EQ(batch.features.size(), epochs.size());
   GnssSceneExtractor<> ex;
   for (std::size_t i = 0; i < epochs.size(); ++i) {
     GnssSceneFeatures f;
-    ASSERT_EQ(ex.push(epochs[i], f), GnssFeatureStatus::ok);
-    EXPECT_EQ(f, batch[i]);
+    ASSERT_TRUE(ex.push(epochs[i], f).accepted());
+    EXPECT_EQ(f, batch.features[i]);
   }
   const std::vector<GnssEpoch> backwards{{1.0, a}, {0.5, a}};
-  try {
-    gnss_scene_features(std::span<const GnssEpoch>(backwards));
-    FAIL() << "expected an error";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("epoch 1"), std::string::npos) << e.what();
-  }
+  const auto refused = gnss_scene_features(std::span<const GnssEpoch>(backwards));
+  EXPECT_EQ(refused.status.outcome, ctxfuse::Outcome::invalid_input);
+  EXPECT_EQ(refused.status.problem, Problem::out_of_order_time);
+  EXPECT_EQ(refused.refused_at, 1u);
+  EXPECT_TRUE(refused.features.empty());
 }
 
 TEST(GnssScene, WindowDropsEpochsOlderThanFourSeconds) {
@@ -134,10 +136,10 @@ TEST(GnssScene, WindowDropsEpochsOlderThanFourSeconds) {
   GnssSceneFeatures f;
   const std::vector<SatelliteObservation> one{{1, 20, 10, 40}},
       two{{1, 20, 10, 40}, {2, 20, 50, 40}};
-  ASSERT_EQ(ex.push({0.0, two}, f), GnssFeatureStatus::ok);
-  ASSERT_EQ(ex.push({1.0, one}, f), GnssFeatureStatus::ok);
+  ASSERT_TRUE(ex.push({0.0, two}, f).accepted());
+  ASSERT_TRUE(ex.push({1.0, one}, f).accepted());
   EXPECT_DOUBLE_EQ(f[F::count_std], 0.5);
-  ASSERT_EQ(ex.push({4.5, one}, f), GnssFeatureStatus::ok);  // window (0.5, 4.5]: t = 1, 4.5
+  ASSERT_TRUE(ex.push({4.5, one}, f).accepted());  // window (0.5, 4.5]: t = 1, 4.5
   EXPECT_DOUBLE_EQ(f[F::count_std], 0.0);
 }
 
@@ -148,7 +150,7 @@ TEST(GnssScene, UnknownGeometryCountsInCn0FeaturesOnly) {
   // geometry: they count in the satellite count and the C/N0 features only.
   const std::vector<SatelliteObservation> e0{
       {1, 20, 10, 40}, {2, 40, 100, 44}, {3, kNaN, kNaN, 48}, {4, 60, 300, 36}, {5, 30, kNaN, 50}};
-  ASSERT_EQ(ex.push({0.0, e0}, f), GnssFeatureStatus::ok);
+  ASSERT_TRUE(ex.push({0.0, e0}, f).accepted());
   EXPECT_EQ(f[F::satellite_count], 5);
   EXPECT_DOUBLE_EQ(f[F::mean_cn0], (40 + 44 + 48 + 36 + 50) / 5.0);
   EXPECT_DOUBLE_EQ(f[F::mean_elevation], (20 + 40 + 60) / 3.0);
@@ -157,18 +159,18 @@ TEST(GnssScene, UnknownGeometryCountsInCn0FeaturesOnly) {
   // t = 1: satellite 3 at 50 dB-Hz: its C/N0 std {48, 50} = 1 counts; the others unchanged (0).
   std::vector<SatelliteObservation> e1 = e0;
   e1[2].cn0_dbhz = 50;
-  ASSERT_EQ(ex.push({1.0, e1}, f), GnssFeatureStatus::ok);
+  ASSERT_TRUE(ex.push({1.0, e1}, f).accepted());
   EXPECT_NEAR(f[F::mean_cn0_std], 1.0 / 5.0, 1e-12);
   // With a fourth satellite of known geometry the computed PDOP is that of the four only.
   const std::vector<SatelliteObservation> known{{1, 90, 0, 40}, {2, 0, 0, 40}, {3, 0, 120, 40}, {4, 0, 240, 40}};
   std::vector<SatelliteObservation> mixed = known;
   mixed.push_back({9, kNaN, 45, 40});
-  ASSERT_EQ(ex.push({2.0, mixed}, f), GnssFeatureStatus::ok);
+  ASSERT_TRUE(ex.push({2.0, mixed}, f).accepted());
   EXPECT_NEAR(f[F::pdop], std::sqrt(8.0 / 3.0), 1e-12);
   EXPECT_EQ(f[F::satellite_count], 5);
   // Infinite values are still errors; only NaN means unknown.
   const std::vector<SatelliteObservation> inf_el{{1, std::numeric_limits<double>::infinity(), 10, 40}};
-  EXPECT_EQ(ex.push({3.0, inf_el}, f), GnssFeatureStatus::invalid_elevation);
+  EXPECT_EQ(ex.push({3.0, inf_el}, f).problem, Problem::invalid_elevation);
 }
 
 // The same sky sampled at 1 Hz and 5 Hz: C/N0 and satellite count change once per second (value
@@ -189,9 +191,9 @@ TEST(GnssScene, WindowsInSecondsMatchAt1And5Hz) {
   for (int step = 1; step <= 5 * 20; ++step) {
     const double t = 0.2 * step;
     const auto sats = sky(t);
-    ASSERT_EQ(fast.push({t, sats}, ff), GnssFeatureStatus::ok);
+    ASSERT_TRUE(fast.push({t, sats}, ff).accepted());
     if (step % 5 != 0) continue;
-    ASSERT_EQ(slow.push({t, sats}, fs), GnssFeatureStatus::ok);
+    ASSERT_TRUE(slow.push({t, sats}, fs).accepted());
     if (t < 4.0) continue;  // both windows full
     for (int k = 0; k < kGnssSceneFeatureCount; ++k) EXPECT_NEAR(ff[k], fs[k], 1e-12) << "feature " << k << " at t " << t;
     ++compared;

@@ -35,7 +35,7 @@ TEST(Allocation, EskfPredictAndGatedUpdateNeverAllocate) {
   gnss.lever_arm = {0.2, 0.0, 1.0};
   eskf::Belief<models::Ins15Model> b;
   b.cov = SquareMatrix<15>::Identity() * 0.01;
-  Eskf<models::Ins15Model, ChiSquareGate> f(model, b, {}, ChiSquareGate(0.999));
+  Eskf<models::Ins15Model, policies::ChiSquareGate> f(model, b, {}, policies::ChiSquareGate(0.999));
   models::ImuSample u;
   u.accel = {0.1, 0.0, 9.81};
   u.gyro = {0.0, 0.0, 0.1};
@@ -58,7 +58,7 @@ TEST(Allocation, EkfNeverAllocates) {
   models::ConstantVelocity<L, 3> cv;
   models::RangeToPoint<L, 3> range;
   range.anchor = {5, 5, 2};
-  Ekf<models::ConstantVelocity<L, 3>, ChiSquareGate> f(cv, {}, {}, ChiSquareGate(0.99));
+  Ekf<models::ConstantVelocity<L, 3>, policies::ChiSquareGate> f(cv, {}, {}, policies::ChiSquareGate(0.99));
   EXPECT_EQ(heap_uses([&] {
               for (int k = 0; k < 1000; ++k) {
                 (void)f.predict({}, 0.1);

@@ -129,7 +129,7 @@ TEST(BadInput, NumericalFailuresLeaveTheBeliefUnchanged) {
   tight.R = SquareMatrix<2>::Identity() * 1e-6;
   const Gaussian<4> before_big = big;
   const FilterOptions any_magnitude{.max_abs_measurement = std::numeric_limits<double>::max()};
-  expect_rejected_unchanged(ekf::update<4>(tight, big, Vector<2>(1e308, 2.0), NoGate{}, any_magnitude),
+  expect_rejected_unchanged(ekf::update<4>(tight, big, Vector<2>(1e308, 2.0), policies::NoGate{}, any_magnitude),
                             Outcome::numerical_failure, Problem::non_finite_state, before_big, big);
 }
 
@@ -192,10 +192,10 @@ TEST_F(EskfFixture, RejectsBadFixesAndLeavesStateUnchanged) {
   EXPECT_EQ(s.problem, Problem::measurement_noise_not_positive_definite);
   expect_unchanged(before);
   gnss.R.setIdentity();
-  s = eskf::update(model, gnss, belief, Vector<3>(1e4, 2, 3), ChiSquareGate(0.999));
+  s = eskf::update(model, gnss, belief, Vector<3>(1e4, 2, 3), policies::ChiSquareGate(0.999));
   EXPECT_EQ(s.outcome, Outcome::gated);
   expect_unchanged(before);
-  ASSERT_TRUE(eskf::update(model, gnss, belief, Vector<3>(1.1, 2, 3), ChiSquareGate(0.999)));
+  ASSERT_TRUE(eskf::update(model, gnss, belief, Vector<3>(1.1, 2, 3), policies::ChiSquareGate(0.999)));
 }
 
 // The covariance prediction is the last step that can fail (after the nominal has been

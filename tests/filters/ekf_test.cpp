@@ -103,7 +103,7 @@ TEST(Ekf, GateRejectsAFarOutlierAndReportsTheStatistic) {
   pos.R = SquareMatrix<2>::Identity();
   Gaussian<4> b{Vector<4>::Zero(), SquareMatrix<4>::Identity()};
   const Gaussian<4> before = b;
-  const ChiSquareGate gate(0.99);
+  const policies::ChiSquareGate gate(0.99);
   const Status s = ekf::update<4>(pos, b, Vector<2>(30.0, 0.0), gate);
   EXPECT_EQ(s.outcome, Outcome::gated);
   EXPECT_NEAR(s.nis, 30.0 * 30.0 / 2.0, 1e-9);  // S = P + R = 2 I

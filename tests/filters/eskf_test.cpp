@@ -55,7 +55,7 @@ TEST(Eskf, UpdateInjectsTheKalmanCorrectionAndResetsTheCovariance) {
   const Vector<3> z(10.8, -2.5, 2.9);
 
   Vector<15> dx_applied;
-  ASSERT_TRUE(eskf::update(m, gnss, b, z, NoGate{}, {}, &dx_applied));
+  ASSERT_TRUE(eskf::update(m, gnss, b, z, policies::NoGate{}, {}, &dx_applied));
 
   // Reference written out with dynamic matrices and an explicit inverse.
   const Eigen::Matrix3d C = prior.nominal.q.toRotationMatrix();
@@ -114,7 +114,7 @@ TEST(Eskf, StaticLevelImuWithPositionFixesStaysPutAndShrinksPositionVariance) {
   eskf::Belief<Ins15Model> b;
   b.cov = SquareMatrix<15>::Identity() * 1e-2;
   Ins15Layout::cov<"p">(b.cov) = SquareMatrix<3>::Identity() * 100.0;
-  Eskf<Ins15Model, ChiSquareGate> f(m, b, {}, ChiSquareGate(0.999));
+  Eskf<Ins15Model, policies::ChiSquareGate> f(m, b, {}, policies::ChiSquareGate(0.999));
   models::ImuSample u;
   u.accel = -m.gravity;  // at rest, level: specific force opposes gravity
   for (int k = 0; k < 500; ++k) {

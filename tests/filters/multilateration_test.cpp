@@ -31,9 +31,9 @@ const std::array<Eigen::Vector3d, 4> kAnchors{Eigen::Vector3d(0, 0, 3), Eigen::V
 TEST(Multilateration, ExactRangesGiveThePointAndTheTextbookCovariance) {
   // Tag at (4, 3), height 1; anchors at height 3.
   const Eigen::Vector2d truth(4.0, 3.0);
-  const filters::MultilaterationOptions o{.tag_height_m = 1.0, .sigma_m = 0.1, .max_rms_m = 0.3};
+  const MultilaterationOptions o{.tag_height_m = 1.0, .sigma_m = 0.1, .max_rms_m = 0.3};
   const auto ranges = exact_ranges(Eigen::Vector3d(4.0, 3.0, 1.0), kAnchors);
-  const auto snap = filters::multilaterate(ranges, o);
+  const auto snap = multilaterate(ranges, o);
   ASSERT_TRUE(snap.ok()) << describe(snap.status.problem);
   EXPECT_LT((snap.position - truth).norm(), 1e-9);
   EXPECT_LT(snap.rms_m, 1e-9);
@@ -48,36 +48,36 @@ TEST(Multilateration, ExactRangesGiveThePointAndTheTextbookCovariance) {
 }
 
 TEST(Multilateration, RefusalsSayWhy) {
-  const filters::MultilaterationOptions o{.tag_height_m = 1.0, .sigma_m = 0.1, .max_rms_m = 0.3};
+  const MultilaterationOptions o{.tag_height_m = 1.0, .sigma_m = 0.1, .max_rms_m = 0.3};
   const auto ranges = exact_ranges(Eigen::Vector3d(4.0, 3.0, 1.0), kAnchors);
   // Two anchors: the mirror image is as good a fit.
-  auto two = filters::multilaterate(std::span(ranges).first(2), o);
+  auto two = multilaterate(std::span(ranges).first(2), o);
   EXPECT_EQ(two.status.outcome, Outcome::invalid_input);
   EXPECT_EQ(two.status.problem, Problem::too_few_measurements);
   // A 2 m NLOS excess on one of four ranges: residuals far above line-of-sight noise.
   auto nlos = ranges;
   nlos[1].range_m += 2.0;
-  const auto gated = filters::multilaterate(nlos, o);
+  const auto gated = multilaterate(nlos, o);
   EXPECT_EQ(gated.status.outcome, Outcome::gated);
   EXPECT_EQ(gated.status.problem, Problem::residual_above_threshold);
   EXPECT_GT(gated.rms_m, 0.3);
   // Without the residual test the same ranges give a (biased) fix.
   auto loose = o;
   loose.max_rms_m = std::numeric_limits<double>::infinity();
-  EXPECT_TRUE(filters::multilaterate(nlos, loose).ok());
+  EXPECT_TRUE(multilaterate(nlos, loose).ok());
   // Three collinear anchors with the tag on their line: no horizontal fix across it.
   const std::array<Eigen::Vector3d, 3> line{Eigen::Vector3d(0, 0, 3), Eigen::Vector3d(5, 0, 3), Eigen::Vector3d(10, 0, 3)};
-  const auto on_line = filters::multilaterate(exact_ranges(Eigen::Vector3d(4.0, 0.0, 1.0), line), o);
+  const auto on_line = multilaterate(exact_ranges(Eigen::Vector3d(4.0, 0.0, 1.0), line), o);
   EXPECT_EQ(on_line.status.outcome, Outcome::numerical_failure);
   EXPECT_EQ(on_line.status.problem, Problem::degenerate_geometry);
   // A non-finite range is invalid input.
   auto bad = ranges;
   bad[2].range_m = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_EQ(filters::multilaterate(bad, o).status.problem, Problem::non_finite_measurement);
+  EXPECT_EQ(multilaterate(bad, o).status.problem, Problem::non_finite_measurement);
   // One iteration is not enough to converge from the centroid.
   auto once = o;
   once.max_iterations = 1;
-  EXPECT_EQ(filters::multilaterate(ranges, once).status.problem, Problem::not_converged);
+  EXPECT_EQ(multilaterate(ranges, once).status.problem, Problem::not_converged);
 }
 
 // 3-D: exact ranges to five anchors at two heights give the point (from below and from above
@@ -87,9 +87,9 @@ TEST(Multilateration, RefusalsSayWhy) {
 TEST(Multilateration, ThreeDimensionalFitAndItsRefusals) {
   const std::array<Eigen::Vector3d, 5> anchors{Eigen::Vector3d(0, 0, 0.5), Eigen::Vector3d(10, 0, 3), Eigen::Vector3d(10, 8, 0.5),
                                                Eigen::Vector3d(0, 8, 3), Eigen::Vector3d(5, 9, 4)};
-  const filters::MultilaterationOptions o{.sigma_m = 0.1};
+  const MultilaterationOptions o{.sigma_m = 0.1};
   for (const Eigen::Vector3d truth : {Eigen::Vector3d(4, 3, 1.3), Eigen::Vector3d(7, 2, -0.4), Eigen::Vector3d(3, 6, 5.0)}) {
-    const auto snap = filters::multilaterate_3d(exact_ranges(truth, anchors), o);
+    const auto snap = multilaterate_3d(exact_ranges(truth, anchors), o);
     ASSERT_TRUE(snap.ok()) << describe(snap.status.problem);
     EXPECT_LT((snap.position - truth).norm(), 1e-9) << truth.transpose();
     Eigen::Matrix3d JtJ = Eigen::Matrix3d::Zero();
@@ -100,9 +100,9 @@ TEST(Multilateration, ThreeDimensionalFitAndItsRefusals) {
     EXPECT_LT((snap.cov - 0.01 * JtJ.inverse()).norm(), 1e-9 * snap.cov.norm());
   }
   // All anchors at 3 m and the tag at 3 m: every direction horizontal, no vertical information.
-  const auto flat = filters::multilaterate_3d(exact_ranges(Eigen::Vector3d(4, 3, 3), kAnchors), o);
+  const auto flat = multilaterate_3d(exact_ranges(Eigen::Vector3d(4, 3, 3), kAnchors), o);
   EXPECT_EQ(flat.status.problem, Problem::degenerate_geometry);
-  const auto three = filters::multilaterate_3d(exact_ranges(Eigen::Vector3d(4, 3, 1), std::span(kAnchors).first(3)), o);
+  const auto three = multilaterate_3d(exact_ranges(Eigen::Vector3d(4, 3, 1), std::span(kAnchors).first(3)), o);
   EXPECT_EQ(three.status.problem, Problem::too_few_measurements);
 }
 

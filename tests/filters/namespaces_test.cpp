@@ -24,7 +24,7 @@ using Cv = models::ConstantVelocity<Layout2, 2>;
 
 TEST(Namespaces, BothOpenCompileAndFilter) {
   Gaussian<4> prior{Vector4d(0.0, 0.0, 1.0, 0.0), Matrix4d::Identity()};
-  Ekf<Cv, ChiSquareGate> filter(Cv{}, prior, {}, ChiSquareGate(0.99));
+  Ekf<Cv, policies::ChiSquareGate> filter(Cv{}, prior, {}, policies::ChiSquareGate(0.99));
   filter.set_time(0.0);
   ASSERT_TRUE(filter.predict_to(1.0, NoInput{}));
   const models::BlockObservation<Layout2, "p"> pos;

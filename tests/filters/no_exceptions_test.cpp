@@ -1,7 +1,8 @@
-// The library's lower layers (core, models, filters, policies: every header, through the
-// generated all_lower_headers.hpp) compiled with -fno-exceptions, as embedded stacks build:
-// construction-time checks return a Problem, steps return a Status, and a constructor given a
-// setting its check refuses stops the program with the setting named (core/error.hpp).
+// The library's lower layers (core, models, filters, policies: every header) and the inference
+// headers of classify/ and features/ (through the generated all_lower_headers.hpp) compiled with
+// -fno-exceptions, as embedded stacks build: construction-time checks return a Problem, steps
+// return a Status, and a constructor given a setting its check refuses stops the program with
+// the setting named (core/error.hpp).
 #if defined(__cpp_exceptions) || defined(__EXCEPTIONS)
 #error "this test must be compiled with -fno-exceptions (tests/filters/CMakeLists.txt)"
 #endif
@@ -20,7 +21,7 @@ using Pos = models::BlockObservation<L, "p">;
 Gaussian<4> prior() { return {Vector<4>(0.0, 0.0, 1.0, 0.0), SquareMatrix<4>::Identity()}; }
 
 TEST(NoExceptions, StepsReportWithStatuses) {
-  Ekf<Cv, ChiSquareGate> ekf(Cv{}, prior(), {}, ChiSquareGate(0.99));
+  Ekf<Cv, policies::ChiSquareGate> ekf(Cv{}, prior(), {}, policies::ChiSquareGate(0.99));
   ekf.set_time(0.0);
   ASSERT_TRUE(ekf.predict_to(1.0, NoInput{}));
   EXPECT_EQ(ekf.predict_to(0.5, NoInput{}).problem, Problem::out_of_order_time);
@@ -56,6 +57,44 @@ TEST(NoExceptions, AnImmRunsOnCheckedSettings) {
   const auto r = filter.cycle({}, 0.5, imm::observe(Fix{}, Pos{}, Vector<2>(0.5, 0.0)));
   ASSERT_TRUE(r.status().accepted());
   EXPECT_NEAR(filter.mode_probabilities().sum(), 1.0, 1e-12);
+}
+
+TEST(NoExceptions, ClassifiersAndExtractorsReportWithStatuses) {
+  // A two-class linear SVM on one feature: f(x) = 2 x - 1 (one support vector at x = 1, weight 2).
+  classify::SvmModel<1, 2> svm;
+  svm.kernel = classify::SvmKernel::linear;
+  svm.num_classes = 2;
+  svm.labels = {1, -1};
+  svm.support_vectors.resize(1, 1);
+  svm.support_vectors(0, 0) = 1.0;
+  svm.coefficients.resize(1, 1);
+  svm.coefficients(0, 0) = 2.0;
+  svm.rho[0] = 1.0;
+  svm.input_mean.setZero();
+  svm.input_std.setOnes();
+  classify::finalize_svm_model(svm);
+  classify::SvmPrediction<2> out;
+  ASSERT_TRUE(classify::svm_predict(svm, Eigen::Matrix<double, 1, 1>(2.0), out));
+  EXPECT_NEAR(out.decision_values[0], 3.0, 1e-15);
+  EXPECT_EQ(out.label, 1);
+  EXPECT_EQ(classify::svm_predict(svm, Eigen::Matrix<double, 1, 1>(std::nan("")), out).problem,
+            Problem::non_finite_features);
+  EXPECT_NEAR(out.decision_values[0], 3.0, 1e-15);  // untouched by the refusal
+
+  const classify::DsResult ds = classify::combine_probabilities(1.0, 0.0);
+  EXPECT_EQ(ds.status.outcome, Outcome::numerical_failure);
+  EXPECT_EQ(ds.status.problem, Problem::total_conflict);
+
+  features::NlosFeatureExtractor uwb;
+  features::NlosFeatures f;
+  ASSERT_TRUE(uwb.push({1.0, 10.0}, 1.0, f));
+  EXPECT_EQ(uwb.push({0.5, 10.0}, 1.0, f).problem, Problem::out_of_order_time);
+
+  const std::vector<features::SatelliteObservation> sats{{1, 30.0, 10.0, 40.0}, {1, 50.0, 90.0, 42.0}};
+  features::GnssSceneExtractor<> scene;
+  features::GnssSceneFeatures g;
+  EXPECT_EQ(scene.push({0.0, sats}, g).problem, Problem::duplicate_satellite);
+  EXPECT_EQ(features::GnssSceneExtractor<>::check({.window_s = 0.0}), Problem::invalid_setting);
 }
 
 TEST(NoExceptionsDeathTest, AConstructorGivenARefusedSettingStopsNamingIt) {

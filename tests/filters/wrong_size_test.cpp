@@ -65,7 +65,7 @@ TEST(WrongSize, EkfUpdateRefusesRunTimeSizedMeasurementsOfTheWrongSize) {
   expect_wrong_size(ekf::update<4>(pos, b, three.segment(0, 1)), Problem::measurement_wrong_size);
   EXPECT_TRUE(same_bytes(before, b));
 
-  Ekf<Cv, ChiSquareGate> filter(Cv{}, before, {}, ChiSquareGate(0.99));
+  Ekf<Cv, policies::ChiSquareGate> filter(Cv{}, before, {}, policies::ChiSquareGate(0.99));
   expect_wrong_size(filter.update(pos, short_z), Problem::measurement_wrong_size);
   expect_wrong_size(filter.score(pos, short_z), Problem::measurement_wrong_size);
   EXPECT_TRUE(same_bytes(before, filter.belief()));
@@ -148,9 +148,9 @@ TEST(WrongSize, EskfRefusesRunTimeSizedFixesOfTheWrongSize) {
 // verdict to the last bit, and the belief untouched.
 TEST(Score, ReportsWhatTheUpdateWouldAndChangesNothing) {
   const Pos pos;
-  const ChiSquareGate gate(0.99);
+  const policies::ChiSquareGate gate(0.99);
   for (const Vector<2>& z : {Vector<2>(1.3, 1.7), Vector<2>(9.0, -6.0)}) {
-    Ekf<Cv, ChiSquareGate> filter(Cv{}, prior(), {}, gate);
+    Ekf<Cv, policies::ChiSquareGate> filter(Cv{}, prior(), {}, gate);
     const Gaussian<4> before = filter.belief();
     const Status scored = filter.score(pos, z);
     EXPECT_TRUE(same_bytes(before, filter.belief()));

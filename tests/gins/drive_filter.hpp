@@ -59,7 +59,7 @@ DriveResult run_drive(const Drive& d, const Model& model, eskf::Belief<Model>& b
   using S = typename Model::State;
   sim::Rng rng(seed, sim::Stream::gnss);
   sim::Rng mag_rng(seed, sim::Stream::magnetometer);
-  const ChiSquareGate gate(0.999);
+  const policies::ChiSquareGate gate(0.999);
   models::StaticDetector detector;
   models::GnssGeodeticPosition<S> gnss;
   const double gnss_sigma = 0.5;
@@ -86,7 +86,7 @@ DriveResult run_drive(const Drive& d, const Model& model, eskf::Belief<Model>& b
     if (!in_outage && k % 100 == 99) {
       const Eigen::Vector3d llh = s.truth.template get<"p">();
       gnss.R = models::geodetic_position_noise(llh, Eigen::Matrix3d::Identity() * gnss_sigma * gnss_sigma);
-      const Eigen::Vector3d noise = standard_normal<3>(rng);
+      const Eigen::Vector3d noise = rng.normals<3>();
       count(eskf::update(model, gnss, b, earth::GeodeticRetraction::inject(llh, gnss_sigma * noise), gate));
     }
     if (c.zihr && detector.entered_static()) held_heading = models::heading_of(C);

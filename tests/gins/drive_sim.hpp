@@ -11,7 +11,6 @@
 
 #include "ctxfuse/models/ins_nav.hpp"
 #include "ctxfuse/sim/random.hpp"
-#include "support/standard_normal.hpp"
 #include "states.hpp"
 
 namespace ctxfuse::test {
@@ -62,8 +61,8 @@ inline Drive simulate_drive(double duration, const std::function<double(double)>
     x = m.predict(x, exact, d.dt, nullptr);
     DriveStep s;
     s.t = t1;
-    const Eigen::Vector3d gyro_noise = standard_normal<3>(rng);
-    const Eigen::Vector3d accel_noise = standard_normal<3>(rng);
+    const Eigen::Vector3d gyro_noise = rng.normals<3>();
+    const Eigen::Vector3d accel_noise = rng.normals<3>();
     s.imu.dtheta = dtheta + gyro_bias * d.dt + sg * gyro_noise;
     s.imu.dv = dv + accel_bias * d.dt + sa * accel_noise;
     s.imu.prev_dtheta = prev_dtheta;

@@ -9,7 +9,6 @@
 #include "ctxfuse/models/ins_updates.hpp"
 #include "ctxfuse/sim/random.hpp"
 #include "states.hpp"
-#include "support/standard_normal.hpp"
 
 namespace {
 using namespace ctxfuse;
@@ -38,7 +37,7 @@ struct GateSetup {
 
 TEST(GinsGate, RejectsAFiftyMetreJumpAndLeavesTheBeliefAlone) {
   GateSetup s;
-  const ChiSquareGate gate(0.99);
+  const policies::ChiSquareGate gate(0.99);
   eskf::Belief<Nav15> b = s.belief;
   const Status st = eskf::update(s.model, s.gnss, b, s.fix({50.0, 0.0, 0.0}), gate);
   EXPECT_EQ(st.outcome, Outcome::gated);
@@ -60,11 +59,11 @@ TEST(GinsGate, AcceptsNominalFixesAtTheGateProbability) {
   const int n = 20000;
   const Eigen::Matrix3d Lp = s.P_pos_ned.llt().matrixL(), Lr = s.R_ned.llt().matrixL();
   for (const double probability : {0.99, 0.95}) {
-    const ChiSquareGate gate(probability);
+    const policies::ChiSquareGate gate(probability);
     int accepted = 0;
     for (int i = 0; i < n; ++i) {
-      const Eigen::Vector3d e = Lp * test::standard_normal<3>(rng);
-      const Eigen::Vector3d noise = Lr * test::standard_normal<3>(rng);
+      const Eigen::Vector3d e = Lp * rng.normals<3>();
+      const Eigen::Vector3d noise = Lr * rng.normals<3>();
       Vector<15> dx = Vector<15>::Zero();
       dx.head<3>() = e;
       const NavState truth = s.model.inject(s.belief.nominal, dx);

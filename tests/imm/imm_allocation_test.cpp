@@ -25,9 +25,9 @@ struct UwbTag {};
 struct Planar {
   using M = models::PlanarImuModel;
   static auto modes() {
-    return hana::make_tuple(imm::make_mode(M{}, imm::Accepts<GnssTag>{}, ChiSquareGate(0.999)),
-                            imm::make_mode(M{}, imm::Accepts<GnssTag, UwbTag>{}, ChiSquareGate(0.999)),
-                            imm::make_mode(M{}, imm::Accepts<UwbTag>{}, ChiSquareGate(0.999)));
+    return hana::make_tuple(imm::make_mode(M{}, imm::Accepts<GnssTag>{}, policies::ChiSquareGate(0.999)),
+                            imm::make_mode(M{}, imm::Accepts<GnssTag, UwbTag>{}, policies::ChiSquareGate(0.999)),
+                            imm::make_mode(M{}, imm::Accepts<UwbTag>{}, policies::ChiSquareGate(0.999)));
   }
   Gaussian<8> init;
   models::PlanarImu u;

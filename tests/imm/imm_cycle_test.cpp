@@ -238,9 +238,9 @@ TEST(ImmBehaviour, TotalRejectionKeepsPredictedProbabilities) {
   init.mean << 0.0, 1.0;
   init.cov << 1.0, 0.0, 0.0, 1e-12;
   auto f = imm::Imm(policies::FixedTransition<3>(policies::sticky_transition<3>(0.9)),
-                    hana::make_tuple(imm::make_mode(drift_mode(1.0), imm::AcceptsAll{}, ChiSquareGate(0.999)),
-                                     imm::make_mode(drift_mode(0.0), imm::AcceptsAll{}, ChiSquareGate(0.999)),
-                                     imm::make_mode(drift_mode(-1.0), imm::AcceptsAll{}, ChiSquareGate(0.999))),
+                    hana::make_tuple(imm::make_mode(drift_mode(1.0), imm::AcceptsAll{}, policies::ChiSquareGate(0.999)),
+                                     imm::make_mode(drift_mode(0.0), imm::AcceptsAll{}, policies::ChiSquareGate(0.999)),
+                                     imm::make_mode(drift_mode(-1.0), imm::AcceptsAll{}, policies::ChiSquareGate(0.999))),
                     init, Vector<3>(0.6, 0.3, 0.1));
   Meas meas;
   meas.H << 1.0, 0.0;

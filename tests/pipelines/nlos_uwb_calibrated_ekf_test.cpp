@@ -181,7 +181,7 @@ TEST(CalibratedEkf, TheFixedLagOutputIsBehindByTheLagAndCloser) {
   const Loop loop;
   const auto ep = epochs(loop, 120.0, 1, kBias, 4);
   const nu::Settings s = raw_reports();
-  nu::CalibratedRangeEkf<ChiSquareGate, true> est(s);
+  nu::CalibratedRangeEkf<policies::ChiSquareGate, true> est(s);
   const Errors e = track(est, loop, ep, 30.0);
   std::printf("newest RMS %.3f m, %.1f s behind %.3f m\n", e.rms, s.smoothed_output_lag_s, e.lagged_rms);
   // The newest record at least the lag back: within one epoch (4 records) of it.

@@ -28,7 +28,7 @@ messages::ImuSample sample(int k) {
 
 // Started by fixes moving east at 2 m/s (an alignment after 5 m), then fed IMU pieces from the
 // start time on; returns the start time.
-double started_with_imu(nu::ImuRangeEkf<NoGate>& est, int samples_after) {
+double started_with_imu(nu::ImuRangeEkf<policies::NoGate>& est, int samples_after) {
   const Eigen::Matrix2d P = Eigen::Matrix2d::Identity() * 0.01;
   for (int k = 0; k <= 40 && !est.started(); ++k) (void)est.start(0.1 * k, Eigen::Vector2d(0.2 * k, 0.0), P);
   EXPECT_TRUE(est.started());
@@ -51,7 +51,7 @@ void predict_by_samples(Gaussian<L::size>& b, double t0, double t1, const models
 TEST(NlosImuEkf, PredictionOverBufferedPiecesEqualsOneStepPerSample) {
   const nu::Settings s;
   const nu::ImuFusionSettings imu;
-  nu::ImuRangeEkf<NoGate> est(s, imu);
+  nu::ImuRangeEkf<policies::NoGate> est(s, imu);
   const double t0 = started_with_imu(est, 50);
   Gaussian<L::size> ref = est.belief();
   const double x0 = est.position().x();
@@ -66,7 +66,7 @@ TEST(NlosImuEkf, PredictionOverBufferedPiecesEqualsOneStepPerSample) {
 TEST(NlosImuEkf, EpochRangesAreAppliedEachAtItsOwnTimeWithTheScalarUpdate) {
   const nu::Settings s;
   const nu::ImuFusionSettings imu;
-  nu::ImuRangeEkf<NoGate> est(s, imu);
+  nu::ImuRangeEkf<policies::NoGate> est(s, imu);
   const double t0 = started_with_imu(est, 50);
   std::array<messages::UwbRange, 3> epoch{};
   const double times[3] = {t0 + 0.104, t0 + 0.131, t0 + 0.162};
@@ -107,7 +107,7 @@ TEST(NlosImuEkf, EpochRangesAreAppliedEachAtItsOwnTimeWithTheScalarUpdate) {
 
 TEST(NlosImuEkf, NoImuOrATimeBeforeTheClockIsRefusedAndChangesNothing) {
   const nu::Settings s;
-  nu::ImuRangeEkf<NoGate> est(s, nu::ImuFusionSettings{});
+  nu::ImuRangeEkf<policies::NoGate> est(s, nu::ImuFusionSettings{});
   EXPECT_EQ(est.predict_to(1.0).problem, Problem::time_not_set);
   const double t0 = started_with_imu(est, 0);  // no IMU at all
   const Gaussian<L::size> before = est.belief();

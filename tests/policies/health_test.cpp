@@ -99,7 +99,7 @@ LockedRun run_locked_filter(bool with_recovery) {
   Gaussian<4> b;
   b.mean.setZero();
   b.cov = SquareMatrix<4>::Identity() * 1e-4;
-  Ekf<Cv, ChiSquareGate> f(cv, b, FilterOptions{}, ChiSquareGate(0.999));
+  Ekf<Cv, policies::ChiSquareGate> f(cv, b, FilterOptions{}, policies::ChiSquareGate(0.999));
   models::BlockObservation<L, "p"> fix;
   fix.R = SquareMatrix<2>::Identity() * 0.09;
   const Eigen::Vector2d truth(3.0, 4.0);
@@ -166,7 +166,7 @@ TEST(FederatedReset, ReplacesTheGlobalAndSharesItOutOrRejectsAndKeepsEverything)
 // variance_to_gate against its closed form in one dimension: y^2 / (S0 + a) = limit gives
 // a = y^2 / limit - S0.
 TEST(VarianceToGate, OneDimensionMatchesTheClosedForm) {
-  const double limit = ChiSquareGate(0.999).threshold(1);
+  const double limit = policies::ChiSquareGate(0.999).threshold(1);
   for (double y : {4.0, 10.0, 250.0}) {
     const double a = policies::variance_to_gate<1>(Vector<1>(y), SquareMatrix<1>(0.7), SquareMatrix<1>(1.0), limit);
     const double expected = y * y / limit - 0.7;
@@ -180,7 +180,7 @@ TEST(VarianceToGate, OneDimensionMatchesTheClosedForm) {
 // In three dimensions with a correlated S0 and a block Jacobian that is not the identity: the
 // widened innovation lies on the boundary (from the inside, within the bisection's width).
 TEST(VarianceToGate, ThreeDimensionsPutTheInnovationOnTheBoundary) {
-  const double limit = ChiSquareGate(0.999).threshold(3);
+  const double limit = policies::ChiSquareGate(0.999).threshold(3);
   SquareMatrix<3> A;
   A << 1.0, 0.3, -0.2, 0.0, 0.8, 0.4, 0.1, 0.0, 1.5;
   const SquareMatrix<3> S0 = A * A.transpose() + 0.05 * SquareMatrix<3>::Identity();
@@ -207,7 +207,7 @@ TEST(EskfRelease, WidensThePositionBlockToTheGateAndUpdates) {
   b.cov = SquareMatrix<15>::Identity() * 0.01;
   b.cov(0, 6) = b.cov(6, 0) = 0.002;  // position correlated with attitude
   const Vector<3> z(31.0, -18.0, 3.5);  // 36 m off a filter that believes 0.1 m
-  const ChiSquareGate gate(0.999);
+  const policies::ChiSquareGate gate(0.999);
 
   eskf::Belief<models::Ins15Model> gated = b;
   EXPECT_EQ(eskf::update(m, gnss, gated, z, gate).outcome, Outcome::gated);

@@ -42,7 +42,7 @@ reliability::Verdict monte_carlo(double filter_psd_factor) {
   eval::MonteCarloAverage nees(epochs), nis(epochs);
   for (int r = 0; r < runs; ++r) {
     sim::Rng rng(20261201u + static_cast<std::uint64_t>(r));
-    auto normal4 = [&] { return reliability::standard_normal<4>(rng); };
+    auto normal4 = [&] { return rng.normals<4>(); };
     const auto start = test::draw_start(Vector<4>(0.0, 5.0, 1.0, 0.5), prior_sd, rng);
     Vector<4> x = start.truth;
     Ekf<Cv> f(assumed, start.prior);

@@ -49,7 +49,6 @@ Ins15Model scaled(Ins15Model m, double q_factor) {
 Eigen::Vector3d true_rate(double t) { return {0.05 * std::sin(0.3 * t), 0.04 * std::cos(0.2 * t), 0.15 * std::sin(0.1 * t)}; }
 Eigen::Vector3d true_accel_n(double t) { return {0.6 * std::sin(0.2 * t), 0.5 * std::cos(0.15 * t), 0.1 * std::sin(0.5 * t)}; }
 
-Vector<3> normal3(sim::Rng& rng) { return reliability::standard_normal<3>(rng); }
 
 reliability::Verdict monte_carlo(double q_factor) {
   const Ins15Model truth_model = imu_model();
@@ -80,16 +79,16 @@ reliability::Verdict monte_carlo(double q_factor) {
       clean.gyro = true_rate(t) + truth.bg;
       clean.accel = truth.q.conjugate() * (true_accel_n(t) - truth_model.gravity) + truth.ba;
       models::ImuSample measured = clean;
-      measured.gyro += sg * normal3(rng);
-      measured.accel += sa * normal3(rng);
+      measured.gyro += sg * rng.normals<3>();
+      measured.accel += sa * rng.normals<3>();
       truth = truth_model.predict(truth, clean, dt, nullptr);
-      truth.bg += sbg * normal3(rng);
-      truth.ba += sba * normal3(rng);
+      truth.bg += sbg * rng.normals<3>();
+      truth.ba += sba * rng.normals<3>();
       EXPECT_TRUE(f.predict(measured, dt).accepted());
 
       if ((k + 1) % imu_per_fix != 0) continue;
       const auto epoch = static_cast<std::size_t>((k + 1) / imu_per_fix - 1);
-      const Vector<3> z = fix.predict(truth, nullptr) + fix_sigma * normal3(rng);
+      const Vector<3> z = fix.predict(truth, nullptr) + fix_sigma * rng.normals<3>();
       const Status s = f.update(fix, z);
       EXPECT_TRUE(s.accepted());
       nis.add(epoch, s.nis);

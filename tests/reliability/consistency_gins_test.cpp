@@ -46,7 +46,6 @@ Model imu_model(double q_factor) {
 Eigen::Vector3d true_rate(double t) { return {0.05 * std::sin(0.3 * t), 0.04 * std::cos(0.2 * t), 0.15 * std::sin(0.1 * t)}; }
 Eigen::Vector3d true_accel_n(double t) { return {0.6 * std::sin(0.2 * t), 0.5 * std::cos(0.15 * t), 0.1 * std::sin(0.5 * t)}; }
 
-using reliability::normal3;
 
 reliability::Verdict monte_carlo(double q_factor) {
   const Model truth_model = imu_model(1.0);
@@ -78,8 +77,8 @@ reliability::Verdict monte_carlo(double q_factor) {
       clean.dtheta = (true_rate(t) + truth.get<"bg">()) * dt;
       clean.dv = truth.get<"theta">().conjugate() * ((true_accel_n(t) - g) * dt) + truth.get<"ba">() * dt;
       models::BodyIncrements measured = clean;
-      measured.dtheta += sg * normal3(rng);
-      measured.dv += sa * normal3(rng);
+      measured.dtheta += sg * rng.normals<3>();
+      measured.dv += sa * rng.normals<3>();
       reliability::chain(clean, clean_prev, k == 0);
       reliability::chain(measured, measured_prev, k == 0);
       truth = truth_model.predict(truth, clean, dt, nullptr);
@@ -89,7 +88,7 @@ reliability::Verdict monte_carlo(double q_factor) {
       if ((k + 1) % imu_per_fix != 0) continue;
       const auto epoch = static_cast<std::size_t>((k + 1) / imu_per_fix - 1);
       const Eigen::Vector3d antenna = fix.predict(truth, nullptr);
-      const Vector<3> z = earth::GeodeticRetraction::inject(antenna, fix_sigma * normal3(rng));
+      const Vector<3> z = earth::GeodeticRetraction::inject(antenna, fix_sigma * rng.normals<3>());
       fix.R = models::geodetic_position_noise(z, Eigen::Matrix3d::Identity() * fix_sigma * fix_sigma);
       const Status s = eskf::update(filter_model, fix, b, z);
       EXPECT_TRUE(s.accepted());

@@ -85,7 +85,7 @@ ImmOutcome monte_carlo(double q_factor) {
   int transition_count = 0;
   for (int r = 0; r < runs; ++r) {
     sim::Rng rng(20261203u + static_cast<std::uint64_t>(r));
-    auto normal4 = [&] { return reliability::standard_normal<4>(rng); };
+    auto normal4 = [&] { return rng.normals<4>(); };
     const auto start = test::draw_start(Vector<4>(0.0, 0.0, 2.0, 1.0), prior_sd, rng);
     Vector<4> x = start.truth;
     imm::ImmOptions<2> options;
@@ -97,7 +97,7 @@ ImmOutcome monte_carlo(double q_factor) {
     for (int k = 0; k < epochs; ++k) {
       const bool fast = manoeuvring(k);
       x = quiet.predict(x, {}, dt, nullptr) + (fast ? chol_manoeuvre : chol_quiet) * normal4();
-      const Vector<2> z = L::get<"p">(x) + fix_sigma * reliability::standard_normal<2>(rng);
+      const Vector<2> z = L::get<"p">(x) + fix_sigma * rng.normals<2>();
       EXPECT_TRUE(f.mix().accepted());
       EXPECT_TRUE(f.predict({}, dt).accepted());
       // NIS of the combined prediction, written out: S = H P H' + R with H picking "p".

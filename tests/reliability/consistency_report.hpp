@@ -10,7 +10,7 @@
 #include "ctxfuse/core/types.hpp"
 #include "ctxfuse/eval/consistency.hpp"
 #include "ctxfuse/sim/random.hpp"
-#include "support/standard_normal.hpp"
+#include "support/draw_start.hpp"
 
 namespace ctxfuse::reliability {
 
@@ -30,7 +30,6 @@ struct Verdict {
   }
 };
 
-using test::standard_normal;  // support/standard_normal.hpp
 
 inline void print_check(const std::string& what, const char* stat, const eval::BandCheck& c) {
   std::printf("%s %s: epochs inside [%.3f, %.3f] %.3f, time average %.4f (band [%.4f, %.4f]), failures %zu\n",

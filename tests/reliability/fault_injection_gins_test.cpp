@@ -59,7 +59,7 @@ const Sim& sim_drive() {
       k.imu.push_back({kT0 + st.t - d.dt, st.imu.dtheta / d.dt, st.imu.dv / d.dt, false});
       if (i % 100 != 99) continue;
       const Eigen::Vector3d llh = st.truth.get<"p">();
-      const Eigen::Vector3d noise = kFixSigma * test::standard_normal<3>(rng);
+      const Eigen::Vector3d noise = kFixSigma * rng.normals<3>();
       const Eigen::Vector3d noisy = earth::GeodeticRetraction::inject(llh, noise);
       messages::GnssFix f;
       f.t = kT0 + st.t;

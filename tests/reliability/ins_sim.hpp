@@ -7,11 +7,9 @@
 
 #include "ctxfuse/models/ins_nav.hpp"
 #include "ctxfuse/sim/random.hpp"
-#include "support/standard_normal.hpp"
 
 namespace ctxfuse::reliability {
 
-inline Eigen::Vector3d normal3(sim::Rng& rng) { return test::standard_normal<3>(rng); }
 
 /// Gives u the previous step's increments (none on the first step) and remembers u as the next
 /// step's previous.
@@ -26,8 +24,8 @@ inline void chain(models::BodyIncrements& u, models::BodyIncrements& prev, bool 
 /// noise (the model's Q of the bias blocks) is added here.
 template <class Model, class State>
 void walk_biases(const Model& m, State& x, double dt, sim::Rng& rng) {
-  x.template get<"bg">() += std::sqrt(m.gyro_bias.variance(dt)) * normal3(rng);
-  x.template get<"ba">() += std::sqrt(m.accel_bias.variance(dt)) * normal3(rng);
+  x.template get<"bg">() += std::sqrt(m.gyro_bias.variance(dt)) * rng.normals<3>();
+  x.template get<"ba">() += std::sqrt(m.accel_bias.variance(dt)) * rng.normals<3>();
 }
 
 }  // namespace ctxfuse::reliability

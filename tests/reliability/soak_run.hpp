@@ -67,8 +67,8 @@ struct InsTruth {
                                  (2.0 * w_ie + w_en).cross(v) * kDt;
     clean.dv = q.conjugate() * dv_n + x.get<"ba">() * kDt;
     models::BodyIncrements measured = clean;
-    measured.dtheta += m.gyro_noise_density * std::sqrt(kDt) * normal3(rng);
-    measured.dv += m.accel_noise_density * std::sqrt(kDt) * normal3(rng);
+    measured.dtheta += m.gyro_noise_density * std::sqrt(kDt) * rng.normals<3>();
+    measured.dv += m.accel_noise_density * std::sqrt(kDt) * rng.normals<3>();
     chain(clean, prev_clean, !started);
     chain(measured, prev_measured, !started);
     started = true;
@@ -138,7 +138,7 @@ inline Report run(const Config& c, const std::function<void(const Report&, std::
   b.cov = sd.cwiseAbs2().asDiagonal();
   models::GnssGeodeticPosition<Nav> fix;
   fix.lever_arm = Eigen::Vector3d(0.5, 0.0, -1.0);
-  const ChiSquareGate gate(0.999);
+  const policies::ChiSquareGate gate(0.999);
 
   // The region pipeline's plain IMM with its default settings.
   const rimm::Settings s;
@@ -181,7 +181,7 @@ inline Report run(const Config& c, const std::function<void(const Report&, std::
     }
     // The fixes at t1 (drawn whether or not an outage withholds them: the same noise either way).
     const Eigen::Vector3d antenna = fix.predict(ins_x.back(), nullptr);
-    const Vector<3> z_ins = earth::GeodeticRetraction::inject(antenna, c.gnss_sigma * normal3(gnss_rng));
+    const Vector<3> z_ins = earth::GeodeticRetraction::inject(antenna, c.gnss_sigma * gnss_rng.normals<3>());
     messages::GnssFix planar_fix;
     planar_fix.t = t1;
     Vector<2> n;  // drawn in index order, so that g++ and clang run the same soak

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <iomanip>
 #include <ostream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -46,7 +47,8 @@ int test_dim(const LabelledCsv& csv, const TestSettings& s, std::ostream& out) {
   std::vector<int> predicted(csv.rows.size());
   SvmPrediction<kMaxCliClasses> p;
   for (std::size_t i = 0; i < csv.rows.size(); ++i) {
-    svm_predict(model, row_vector<Dim>(csv.rows[i]), p);  // rows were checked finite when read
+    if (!svm_predict(model, row_vector<Dim>(csv.rows[i]), p))  // the reader refused non-finite rows
+      throw std::logic_error("classify: a checked row was refused by the SVM");
     predicted[i] = p.label;
     if (!predictions.is_open()) continue;
     predictions << i + 1 << ',' << csv.labels[i] << ',' << p.label;

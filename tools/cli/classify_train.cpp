@@ -7,6 +7,7 @@
 #include <iomanip>
 #include <ostream>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -169,7 +170,8 @@ int train_dim(const LabelledCsv& csv, const TrainSettings& s, std::ostream& out,
   std::vector<int> predicted(csv.rows.size());
   SvmPrediction<kMaxCliClasses> p;
   for (std::size_t i = 0; i < csv.rows.size(); ++i) {
-    svm_predict(model, row_vector<Dim>(csv.rows[i]), p);
+    if (!svm_predict(model, row_vector<Dim>(csv.rows[i]), p))  // the reader refused non-finite rows
+      throw std::logic_error("classify: a checked row was refused by the SVM");
     predicted[i] = p.label;
   }
   const auto m = confusion_over(classes, csv.labels, predicted);

@@ -124,17 +124,23 @@ int run_joint(const Table& train, const Table& test, const Settings& s, std::ost
     std::vector<int> y;
     for (const auto& v : x) {
       cls::SvmPrediction<8> p;
-      if (cls::svm_predict(svm, v, p) != cls::SvmStatus::ok) throw std::runtime_error("SVM prediction failed");
+      if (const ctxfuse::Status st = cls::svm_predict(svm, v, p); !st)
+        throw std::runtime_error("SVM prediction failed: " + std::string(ctxfuse::describe(st.problem)));
       y.push_back(p.label);
     }
     return y;
   };
   auto hmm_labels = [&](const std::vector<Vec>& x) {
-    if (s.viterbi) return cls::viterbi<N, D>(hmm, x).path;
+    if (s.viterbi) {
+      auto v = cls::viterbi<N, D>(hmm, x);
+      if (!v.status) throw std::runtime_error("HMM: row " + std::to_string(v.refused_at + 1) + " is not finite");
+      return std::move(v.path);
+    }
     cls::HmmForwardFilter<N, D> filter(hmm);
     std::vector<int> y;
     for (const auto& v : x) {
-      filter.step(v);  // a rejected epoch keeps the previous posterior: its argmax is reused
+      // A refused epoch keeps the previous posterior: its argmax is reused.
+      static_cast<void>(filter.step(v));
       y.push_back(filter.most_probable());
     }
     return y;

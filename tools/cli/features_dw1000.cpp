@@ -153,8 +153,8 @@ int run_dw1000(Args args, std::ostream& out, std::ostream& err) {
     *f << (height_column && !dir.empty() ? ",height_cm\n" : "\n");
     for (const auto& fr : frames) {
       feat::Dw1000Features x;
-      if (const auto s = feat::dw1000_features(fr.d, x); s != feat::Dw1000Status::ok) {
-        if (counts.rejected++ < 5) err << "  frame skipped: " << feat::describe(s) << '\n';
+      if (const ctxfuse::Status s = feat::dw1000_features(fr.d, x); !s) {
+        if (counts.rejected++ < 5) err << "  frame skipped: " << ctxfuse::describe(s.problem) << '\n';
         continue;
       }
       ++counts.rows;

@@ -144,9 +144,9 @@ int run_gnss(Args args, std::ostream& out, std::ostream& err) {
       }
       feat::GnssSceneFeatures f;
       const auto status = extractor.push({time, sats, pdop}, f);
-      if (status != feat::GnssFeatureStatus::ok)
+      if (!status)
         throw io::ParseError(sat_file.name(), rows.front().line, 0, "",
-                             io::cat("epoch at time_s ", fmt(time), ": ", feat::describe(status)));
+                             io::cat("epoch at time_s ", fmt(time), ": ", ctxfuse::describe(status.problem)));
       std::optional<int> label;
       if (!labels_path.empty() && !(label = label_of(time))) {
         ++unlabelled;

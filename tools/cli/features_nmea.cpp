@@ -87,9 +87,9 @@ int run_nmea(Args args, std::ostream& out, std::ostream& err) {
   for (std::size_t i = 0; i < rx.epochs.size(); ++i) {
     if (std::isnan(rx.epochs[i].time_s)) continue;
     const auto status = extractor.push(feat::to_gnss_epoch(rx.epochs[i], storage), features[i]);
-    valid[i] = status == feat::GnssFeatureStatus::ok;
+    valid[i] = status.accepted();
     if (!valid[i] && rejected++ < 5)
-      err << "  epoch at t = " << fmt(rx.epochs[i].time_s) << " s skipped: " << feat::describe(status) << '\n';
+      err << "  epoch at t = " << fmt(rx.epochs[i].time_s) << " s skipped: " << ctxfuse::describe(status.problem) << '\n';
   }
 
   auto labelled = feat::label_scenes(rx.epochs, ref.epochs, thresholds);

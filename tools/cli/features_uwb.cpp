@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <map>
 #include <ostream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -72,7 +73,9 @@ int run_uwb_static(Args args, std::ostream& out, std::ostream& err) {
       *f << ',' << fmt(r.range_residual_m()) << ',' << fmt(r.rssi_dbm) << ',' << fmt(r.rssi_minus_first_path_db());
     } else {
       feat::RangeWindowFeatures<64>::Output o;
-      stats_window.push(r.range_residual_m(), r.rssi_dbm, r.first_path_rssi_dbm, o);  // finite: reader checked
+      // The reader refused non-finite values, so a refusal here is a bug, not bad data.
+      if (const ctxfuse::Status st = stats_window.push(r.range_residual_m(), r.rssi_dbm, r.first_path_rssi_dbm, o); !st)
+        throw std::logic_error("uwb-static window: " + std::string(ctxfuse::describe(st.problem)));
       *f << ',' << fmt(o.residual_mean_m) << ',' << fmt(o.residual_std_m) << ',' << fmt(o.rssi_mean_dbm) << ','
          << fmt(o.rssi_minus_first_path_mean_db);
     }

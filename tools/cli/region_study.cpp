@@ -3,7 +3,7 @@
 // how many GNSS and UWB updates each estimator's chi-square gate rejected per zone, and the
 // errors; then a summary of the paper's ordering (region IMM < IMM < FKF) over the seeds.
 // docs/results.md quotes its numbers, so every printed number is also in the --json document.
-// The zones and what is counted in them: cli/region_study_zones.hpp.
+// The zones and what is counted in them: studies/region_zones.hpp (printed by cli/region_study_zones.hpp).
 //
 // Gate counts come from the pipeline's update observer (pipelines/region_imm/aided.hpp,
 // UpdateEvent), so the pipeline runs unchanged: the tracks are those of ri::run.
@@ -58,8 +58,7 @@ SeedResult study_seed(const sim::DriveConfig& cfg, const ri::Settings& s, std::o
   const ri::Recognition r = ri::recognise(train_region_recogniser(cfg), features);
   const auto regions = ri::region_track(features, r.joint);
   const auto true_regions = ri::region_track(features, labels);
-  std::map<std::pair<double, int>, bool> nlos;
-  for (const auto& u : test.uwb) nlos[{u.t, u.anchor_id}] = u.nlos;
+  const NlosTruth nlos = nlos_truth(test);
 
   out << formatted("\n=== seed %llu  (approach mouth at x = %.1f m; drive %.0f s)\n", static_cast<unsigned long long>(cfg.seed), zones.mouth_x,
              test.duration());

@@ -6,11 +6,15 @@
 // associative, so n sources are folded pairwise; the reported conflict is that of the n-way
 // combination, 1 - prod(K_i).
 // Total conflict (K = 0, e.g. one source certain NLOS, another certain LOS) is reported as a
-// status, never divided by: the result then carries the vacuous assignment m(Theta) = 1.
+// status (numerical failure, Problem::total_conflict), never divided by: the result then carries
+// the vacuous assignment m(Theta) = 1. A mass that is not one is refused (invalid input,
+// Problem::invalid_mass).
 #pragma once
 
 #include <cmath>
 #include <span>
+
+#include "ctxfuse/core/status.hpp"
 
 namespace ctxfuse::classify {
 
@@ -26,13 +30,11 @@ struct BinaryMass {
   constexpr double plausibility_nlos() const { return nlos + either; }
 };
 
-enum class DsStatus { ok, total_conflict, invalid_mass };
-
 struct DsResult {
   BinaryMass mass{0.0, 0.0, 1.0};
   /// Mass the sources put on contradictory hypotheses, 1 - K (0 = full agreement).
   double conflict = 0.0;
-  DsStatus status = DsStatus::ok;
+  Status status{};  // accepted, or why not (the core vocabulary of filters and classifiers)
   /// R of eq. 8: the combined NLOS mass.
   double nlos_belief() const { return mass.nlos; }
 };
@@ -48,7 +50,7 @@ constexpr bool is_valid_mass(const BinaryMass& m) {
 inline DsResult combine(const BinaryMass& a, const BinaryMass& b) {
   DsResult r;
   if (!is_valid_mass(a) || !is_valid_mass(b)) {
-    r.status = DsStatus::invalid_mass;
+    r.status = Status::invalid(Problem::invalid_mass);
     r.conflict = std::nan("");
     return r;
   }
@@ -58,7 +60,7 @@ inline DsResult combine(const BinaryMass& a, const BinaryMass& b) {
   const double agreement = nlos + los + either;  // K
   r.conflict = a.nlos * b.los + a.los * b.nlos;
   if (!(agreement > 0.0)) {
-    r.status = DsStatus::total_conflict;
+    r.status = Status::failure(Problem::total_conflict);
     r.conflict = 1.0;
     return r;
   }
@@ -77,9 +79,9 @@ inline DsResult combine(std::span<const BinaryMass> sources) {
   double agreement_product = 1.0;
   for (const auto& s : sources) {
     const DsResult next = combine(acc.mass, s);
-    if (next.status != DsStatus::ok) {
+    if (!next.status) {
       DsResult out = next;
-      if (next.status == DsStatus::total_conflict) out.conflict = 1.0;
+      if (next.status.problem == Problem::total_conflict) out.conflict = 1.0;
       return out;
     }
     agreement_product *= 1.0 - next.conflict;

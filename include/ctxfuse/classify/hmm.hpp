@@ -8,6 +8,10 @@
 // diagonal (CovarianceKind::diagonal drops the off-diagonal terms at estimation time, which
 // helps when a region has few samples). Both are stored as a full matrix plus its Cholesky
 // factor, so evaluation is the same code for both.
+//
+// Errors: building or fitting a model from unusable parameters or data is a setting error
+// (core/error.hpp: std::invalid_argument naming it; under -fno-exceptions, a message and abort);
+// Viterbi and the forward filter refuse a bad observation with a Status and never throw.
 #pragma once
 
 #include <Eigen/Cholesky>
@@ -19,9 +23,11 @@
 #include <limits>
 #include <numbers>
 #include <span>
-#include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "ctxfuse/core/error.hpp"
+#include "ctxfuse/core/status.hpp"
 
 namespace ctxfuse::classify {
 
@@ -59,18 +65,18 @@ struct GaussianHmm {
   void finalize() {
     for (int k = 0; k < NumStates; ++k) {
       if (!means[k].allFinite() || !covariances[k].allFinite())
-        throw std::invalid_argument("GaussianHmm: state " + std::to_string(k) +
+        ctxfuse::detail::invalid_setting("GaussianHmm: state " + std::to_string(k) +
                                     " has a non-finite mean or covariance");
       Eigen::LLT<Covariance> llt(covariances[k]);
       if (llt.info() != Eigen::Success)
-        throw std::invalid_argument("GaussianHmm: covariance of state " + std::to_string(k) +
+        ctxfuse::detail::invalid_setting("GaussianHmm: covariance of state " + std::to_string(k) +
                                     " is not positive definite");
       cholesky_lower[k] = llt.matrixL();
       const double log_det = 2.0 * cholesky_lower[k].diagonal().array().log().sum();
       log_normaliser[k] = -0.5 * (Dim * std::log(2.0 * std::numbers::pi) + log_det);
     }
     if (std::isnan(log_initial.sum()) || std::isnan(log_transition.sum()))
-      throw std::invalid_argument("GaussianHmm: NaN in initial or transition log-probabilities");
+      ctxfuse::detail::invalid_setting("GaussianHmm: NaN in initial or transition log-probabilities");
   }
 
   double log_emission(int state, const Observation& x) const {
@@ -95,7 +101,7 @@ GaussianHmm<N, D> make_gaussian_hmm(const Eigen::Matrix<double, N, 1>& initial,
                                     const std::array<Eigen::Matrix<double, D, D>, N>& covariances) {
   auto check_distribution = [](const auto& p, const std::string& what) {
     if (!p.allFinite() || (p.array() < 0.0).any() || std::abs(p.sum() - 1.0) > 1e-9)
-      throw std::invalid_argument("make_gaussian_hmm: " + what +
+      ctxfuse::detail::invalid_setting("make_gaussian_hmm: " + what +
                                   " is not a probability distribution (finite, >= 0, sums to 1)");
   };
   check_distribution(initial, "initial");
@@ -138,7 +144,7 @@ GaussianHmm<N, D> fit_supervised(std::span<const LabelledSequence<D>> sequences,
   using Vec = Eigen::Matrix<double, D, 1>;
   using Mat = Eigen::Matrix<double, D, D>;
   if (!(options.pseudo_count >= 0.0) || !(options.variance_floor >= 0.0))
-    throw std::invalid_argument("fit_supervised: pseudo_count and variance_floor must be >= 0");
+    ctxfuse::detail::invalid_setting("fit_supervised: pseudo_count and variance_floor must be >= 0");
   Eigen::Matrix<double, N, 1> initial_counts = Eigen::Matrix<double, N, 1>::Zero();
   Eigen::Matrix<double, N, N> transition_counts = Eigen::Matrix<double, N, N>::Zero();
   std::array<double, N> n{};
@@ -151,18 +157,18 @@ GaussianHmm<N, D> fit_supervised(std::span<const LabelledSequence<D>> sequences,
   for (std::size_t s = 0; s < sequences.size(); ++s) {
     const auto& seq = sequences[s];
     if (seq.observations.size() != seq.labels.size())
-      throw std::invalid_argument("fit_supervised: sequence " + std::to_string(s) + " has " +
+      ctxfuse::detail::invalid_setting("fit_supervised: sequence " + std::to_string(s) + " has " +
                                   std::to_string(seq.observations.size()) + " observations but " +
                                   std::to_string(seq.labels.size()) + " labels");
     for (std::size_t t = 0; t < seq.labels.size(); ++t) {
       const int k = seq.labels[t];
       if (k < 0 || k >= N)
-        throw std::invalid_argument("fit_supervised: sequence " + std::to_string(s) + " epoch " +
+        ctxfuse::detail::invalid_setting("fit_supervised: sequence " + std::to_string(s) + " epoch " +
                                     std::to_string(t) + ": label " + std::to_string(k) +
                                     " outside [0, " + std::to_string(N) + ")");
       const Vec& x = seq.observations[t];
       if (!x.allFinite())
-        throw std::invalid_argument("fit_supervised: sequence " + std::to_string(s) + " epoch " +
+        ctxfuse::detail::invalid_setting("fit_supervised: sequence " + std::to_string(s) + " epoch " +
                                     std::to_string(t) + ": non-finite observation");
       if (t == 0)
         initial_counts[k] += 1.0;
@@ -176,7 +182,7 @@ GaussianHmm<N, D> fit_supervised(std::span<const LabelledSequence<D>> sequences,
   GaussianHmm<N, D> hmm;
   initial_counts.array() += options.pseudo_count;
   if (initial_counts.sum() <= 0.0)
-    throw std::invalid_argument("fit_supervised: no sequences and pseudo_count 0");
+    ctxfuse::detail::invalid_setting("fit_supervised: no sequences and pseudo_count 0");
   hmm.log_initial = (initial_counts / initial_counts.sum()).array().log().matrix();
   transition_counts.array() += options.pseudo_count;
   for (int i = 0; i < N; ++i) {
@@ -191,7 +197,7 @@ GaussianHmm<N, D> fit_supervised(std::span<const LabelledSequence<D>> sequences,
   }
   for (int k = 0; k < N; ++k) {
     if (n[k] < 2.0)
-      throw std::invalid_argument("fit_supervised: state " + std::to_string(k) + " has " +
+      ctxfuse::detail::invalid_setting("fit_supervised: state " + std::to_string(k) + " has " +
                                   std::to_string(int(n[k])) +
                                   " samples; at least 2 are needed for its covariance");
     hmm.means[k] = sum[k] / n[k];
@@ -209,10 +215,14 @@ template <int N>
 struct ViterbiResult {
   std::vector<int> path;
   double log_probability = -std::numeric_limits<double>::infinity();  // log p(path, observations)
+  /// Accepted, or invalid input (Problem::non_finite_measurement) with the path empty and
+  /// `refused_at` the index of the first non-finite observation.
+  Status status{};
+  std::size_t refused_at = 0;
 };
 
-/// Most probable state sequence of a batch (eq. 17). Throws std::invalid_argument on a
-/// non-finite observation (naming its index). An empty batch gives an empty path.
+/// Most probable state sequence of a batch (eq. 17). An empty batch gives an empty path; a
+/// non-finite observation is refused (ViterbiResult::status) before any work is done.
 template <int N, int D>
 ViterbiResult<N> viterbi(const GaussianHmm<N, D>& hmm,
                          std::span<const Eigen::Matrix<double, D, 1>> observations) {
@@ -220,11 +230,15 @@ ViterbiResult<N> viterbi(const GaussianHmm<N, D>& hmm,
   ViterbiResult<N> result;
   const std::size_t T = observations.size();
   if (T == 0) return result;
+  for (std::size_t t = 0; t < T; ++t)
+    if (!observations[t].allFinite()) {
+      result.status = Status::invalid(Problem::non_finite_measurement);
+      result.refused_at = t;
+      return result;
+    }
   std::vector<std::array<int, N>> back(T);
   StateVector delta = StateVector::Constant(-std::numeric_limits<double>::infinity());
   for (std::size_t t = 0; t < T; ++t) {
-    if (!observations[t].allFinite())
-      throw std::invalid_argument("viterbi: observation " + std::to_string(t) + " is not finite");
     const StateVector emission = hmm.log_emissions(observations[t]);
     if (t == 0) {
       delta = hmm.log_initial + emission;
@@ -257,8 +271,6 @@ ViterbiResult<N> viterbi(const GaussianHmm<N, D>& hmm,
   return result;
 }
 
-enum class FilterStatus { ok, non_finite_observation, zero_likelihood };
-
 /// Online forward filter: after each step, posterior() = p(state_t | observations_1..t).
 /// The state is a normalised log-posterior of fixed size, so a step never allocates.
 template <int N, int D>
@@ -276,10 +288,12 @@ class HmmForwardFilter {
     steps_ = 0;
   }
 
-  /// Folds in one observation. On a non-finite observation, or one that no state can have
-  /// emitted (likelihood underflows to 0), the filter is left unchanged and the status says why.
-  FilterStatus step(const Observation& x) {
-    if (!x.allFinite()) return FilterStatus::non_finite_observation;
+  /// Folds in one observation: accepted, with Status::log_likelihood the step's evidence
+  /// log p(x_t | x_1..t-1). Refused, the filter left unchanged: a non-finite observation
+  /// (invalid input, Problem::non_finite_measurement) or one that no state can have emitted
+  /// (numerical failure, Problem::zero_likelihood: the likelihood underflows to 0).
+  Status step(const Observation& x) {
+    if (!x.allFinite()) return Status::invalid(Problem::non_finite_measurement);
     StateVector predicted;
     if (steps_ == 0) {
       predicted = model_->log_initial;
@@ -289,11 +303,13 @@ class HmmForwardFilter {
     }
     const StateVector joint = predicted + model_->log_emissions(x);
     const double evidence = log_sum_exp(joint);
-    if (!std::isfinite(evidence)) return FilterStatus::zero_likelihood;
+    if (!std::isfinite(evidence)) return Status::failure(Problem::zero_likelihood);
     log_posterior_ = joint.array() - evidence;
     log_likelihood_ += evidence;
     ++steps_;
-    return FilterStatus::ok;
+    Status accepted;
+    accepted.log_likelihood = evidence;
+    return accepted;
   }
 
   StateVector posterior() const { return log_posterior_.array().exp().matrix(); }

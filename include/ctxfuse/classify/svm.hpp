@@ -28,6 +28,8 @@
 #include <string>
 #include <string_view>
 
+#include "ctxfuse/core/error.hpp"
+#include "ctxfuse/core/status.hpp"
 #include "ctxfuse/classify/svm_rbf.hpp"
 
 namespace ctxfuse::classify {
@@ -119,25 +121,15 @@ std::string svm_model_problem(const SvmModel<Dim, MaxClasses>& m) {
   return {};
 }
 
-/// Validates a model assembled by hand or by a loader and computes its derived fields.
-/// Throws std::invalid_argument naming the problem.
+/// Validates a model assembled by hand or by a loader and computes its derived fields. A model
+/// that svm_model_problem (its check) refuses is a setting error (core/error.hpp: throws
+/// std::invalid_argument naming the problem; under -fno-exceptions, prints it and aborts).
 template <int Dim, int MaxClasses>
 void finalize_svm_model(SvmModel<Dim, MaxClasses>& m) {
-  if (auto problem = svm_model_problem(m); !problem.empty()) throw std::invalid_argument("SVM model: " + problem);
+  if (auto problem = svm_model_problem(m); !problem.empty()) ctxfuse::detail::invalid_setting("SVM model: " + problem);
   m.linear_weights.setZero();
   if (m.kernel == SvmKernel::linear)
     m.linear_weights.topRows(m.num_machines()) = m.coefficients * m.support_vectors;
-}
-
-enum class SvmStatus : std::uint8_t { ok, non_finite_input, input_magnitude };
-
-constexpr std::string_view describe(SvmStatus s) {
-  switch (s) {
-    case SvmStatus::ok: return "ok";
-    case SvmStatus::non_finite_input: return "feature vector contains NaN or Inf";
-    case SvmStatus::input_magnitude: return "feature vector magnitude above 1e150 (kernel would overflow)";
-  }
-  return "unknown";
 }
 
 /// Output of one prediction, in caller-owned fixed storage.
@@ -267,10 +259,10 @@ namespace svm_detail {
 
 /// The input checks of svm_decision and svm_predict (also used by svm_fast_rbf.hpp).
 template <int Dim>
-SvmStatus input_status(const Eigen::Matrix<double, Dim, 1>& x) {
-  if (!x.allFinite()) return SvmStatus::non_finite_input;
-  if (x.cwiseAbs().maxCoeff() > 1e150) return SvmStatus::input_magnitude;
-  return SvmStatus::ok;
+Status input_status(const Eigen::Matrix<double, Dim, 1>& x) {
+  if (!x.allFinite()) return Status::invalid(Problem::non_finite_features);
+  if (x.cwiseAbs().maxCoeff() > 1e150) return Status::invalid(Problem::feature_magnitude);
+  return {};
 }
 
 /// From the kernel sums of every machine: decision values sums - rho and the label by vote
@@ -347,11 +339,12 @@ void add_probabilities(const SvmModel<Dim, MaxClasses>& model, SvmPrediction<Max
 
 /// Decision values of every machine into out.decision_values, and the label by vote (one-vs-one,
 /// ties to the lower class index, as libsvm) or by the largest decision value (one-vs-rest).
-/// On bad input `out` is left untouched.
+/// Returns accepted, or refuses a feature vector with NaN/Inf (Problem::non_finite_features) or
+/// a feature above 1e150 (Problem::feature_magnitude); on a refusal `out` is left untouched.
 template <int Dim, int MaxClasses>
-SvmStatus svm_decision(const SvmModel<Dim, MaxClasses>& model, const Eigen::Matrix<double, Dim, 1>& x,
-                       SvmPrediction<MaxClasses>& out) {
-  if (const SvmStatus status = svm_detail::input_status(x); status != SvmStatus::ok) return status;
+Status svm_decision(const SvmModel<Dim, MaxClasses>& model, const Eigen::Matrix<double, Dim, 1>& x,
+                    SvmPrediction<MaxClasses>& out) {
+  if (const Status status = svm_detail::input_status(x); !status) return status;
   const Eigen::Matrix<double, Dim, 1> xs = svm_standardize(model, x);
   const int machines = model.num_machines();
   std::array<double, SvmModel<Dim, MaxClasses>::kMaxMachines> sums{};
@@ -361,7 +354,7 @@ SvmStatus svm_decision(const SvmModel<Dim, MaxClasses>& model, const Eigen::Matr
     svm_detail::rbf_sums(model, xs, machines, sums.data());
   }
   svm_detail::finish_decision(model, sums.data(), out);
-  return SvmStatus::ok;
+  return {};
 }
 
 /// Decision values plus, when the model has Platt parameters, class probabilities:
@@ -370,13 +363,14 @@ SvmStatus svm_decision(const SvmModel<Dim, MaxClasses>& model, const Eigen::Matr
 ///  - one-vs-rest: each machine's clipped sigmoid P(class m | x) divided by their sum, a common
 ///    heuristic since k independent machines give no joint model.
 /// With probabilities the label is their argmax (first on ties), as svm_predict_probability.
+/// Refuses bad input as svm_decision does.
 template <int Dim, int MaxClasses>
-SvmStatus svm_predict(const SvmModel<Dim, MaxClasses>& model, const Eigen::Matrix<double, Dim, 1>& x,
-                      SvmPrediction<MaxClasses>& out) {
-  const SvmStatus status = svm_decision(model, x, out);
-  if (status != SvmStatus::ok || !model.has_probability) return status;
+Status svm_predict(const SvmModel<Dim, MaxClasses>& model, const Eigen::Matrix<double, Dim, 1>& x,
+                   SvmPrediction<MaxClasses>& out) {
+  const Status status = svm_decision(model, x, out);
+  if (!status || !model.has_probability) return status;
   svm_detail::add_probabilities(model, out);
-  return SvmStatus::ok;
+  return {};
 }
 
 }  // namespace ctxfuse::classify

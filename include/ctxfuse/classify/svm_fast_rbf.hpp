@@ -120,30 +120,30 @@ class SvmFastRbf {
   const Model& model() const { return model_; }
   const SvmFastRbfPlan& plan() const { return plan_; }
 
-  /// As svm_decision (same statuses, `out` untouched on bad input).
-  SvmStatus decision(const Feature& x, SvmPrediction<MaxClasses>& out, SvmFastReport* report = nullptr) const {
+  /// As svm_decision (same Status, `out` untouched on bad input).
+  Status decision(const Feature& x, SvmPrediction<MaxClasses>& out, SvmFastReport* report = nullptr) const {
     return run(x, out, report, false);
   }
   /// As svm_predict.
-  SvmStatus predict(const Feature& x, SvmPrediction<MaxClasses>& out, SvmFastReport* report = nullptr) const {
+  Status predict(const Feature& x, SvmPrediction<MaxClasses>& out, SvmFastReport* report = nullptr) const {
     return run(x, out, report, true);
   }
 
   /// The raw fast decision values f_m and bounds E_m(x) >= |f_m - svm_decision's f_m| (needs
   /// plan().eligible; no fallback, no acceptance test).
-  SvmStatus fast_values(const Feature& x, Values& values, Values& bounds) const {
-    if (const SvmStatus st = svm_detail::input_status(x); st != SvmStatus::ok) return st;
+  Status fast_values(const Feature& x, Values& values, Values& bounds) const {
+    if (const Status st = svm_detail::input_status(x); !st) return st;
     evaluate(svm_standardize(model_, x), values, bounds);
     for (int m = 0; m < model_.num_machines(); ++m) values[idx(m)] -= model_.rho[idx(m)];  // as finish_decision
-    return SvmStatus::ok;
+    return {};
   }
 
  private:
   static constexpr int L = svm_detail::kFgtLanes;
   static std::size_t idx(long i) { return static_cast<std::size_t>(i); }
 
-  SvmStatus run(const Feature& x, SvmPrediction<MaxClasses>& out, SvmFastReport* report, bool probabilities) const {
-    if (const SvmStatus st = svm_detail::input_status(x); st != SvmStatus::ok) return st;
+  Status run(const Feature& x, SvmPrediction<MaxClasses>& out, SvmFastReport* report, bool probabilities) const {
+    if (const Status st = svm_detail::input_status(x); !st) return st;
     SvmFastReport r;
     // Probabilities of one-vs-one models with more than two classes: always the exact path
     // (accept() explains why).
@@ -157,9 +157,13 @@ class SvmFastRbf {
       r.fast = accept(sums, bounds, probabilities && model_.has_probability, out);
       r.fallback = !r.fast;
     }
-    if (!r.fast) probabilities ? svm_predict(model_, x, out) : svm_decision(model_, x, out);
+    if (!r.fast) {
+      // The input passed the same checks above, so the exact path accepts it too.
+      const Status exact = probabilities ? svm_predict(model_, x, out) : svm_decision(model_, x, out);
+      if (!exact) return exact;
+    }
     if (report) *report = r;
-    return SvmStatus::ok;
+    return {};
   }
 
   /// Fills `out` from the fast sums; true when the result is guaranteed (see the header).

@@ -75,7 +75,7 @@ SvmCrossValidation cross_validate_svm(const SvmFeatures<Dim>& x, std::span<const
     for (std::size_t i = 0; i < y.size(); ++i) {
       if (fold[i] != f) continue;
       const Eigen::Matrix<double, Dim, 1> xi = x.row(static_cast<Eigen::Index>(i)).transpose();
-      svm_predict(model, xi, out);
+      if (!svm_predict(model, xi, out)) continue;  // NaN/Inf features: left unevaluated
       result.predicted[i] = out.label;
       result.evaluated[i] = true;
       ++done;

@@ -1,6 +1,8 @@
-// Result of a filter step. A step either commits (accepted) or leaves the estimate exactly as
-// it was, and says why: gated by the innovation test, invalid input (which one), or a numerical
-// failure. Errors are values, never asserts or exits: an estimator in a vehicle must keep going.
+// Result of a step of a filter, a classifier or a feature extractor: one vocabulary for all. A
+// step either commits (accepted: the estimate changed, the prediction or features were written)
+// or leaves everything exactly as it was, and says why: gated by the innovation test, invalid
+// input (which one), or a numerical failure. Errors are values, never asserts or exits: an
+// estimator in a vehicle must keep going.
 // Status is [[nodiscard]]: a step that was refused and whose status nobody read is the silent
 // failure this type exists to prevent. A caller that may ignore one says why where it does.
 #pragma once
@@ -12,7 +14,8 @@
 namespace ctxfuse {
 
 enum class Outcome : std::uint8_t {
-  accepted,           // the estimate was changed (from score(): an update would change it)
+  accepted,           // the estimate was changed (from score(): an update would change it); a
+                      // classifier or extractor wrote its output
   gated,              // measurement valid but rejected by the gate; statistic/threshold tell why
   invalid_input,      // a caller-supplied value is unusable; `problem` names it
   numerical_failure,  // the numbers went bad inside the step; `problem` names where
@@ -61,6 +64,22 @@ enum class Problem : std::uint8_t {
   measurement_wrong_size,  // z's rows x cols is not the measurement model's dim x 1
   input_wrong_size,        // u's rows x cols is not the process model's Input
   input_wrong_kind,        // u is another kind than the model takes (IMU increments where rates are expected)
+  // Classifiers and feature extractors (classify/, features/): the same Status as the filters.
+  non_finite_time,        // a time stamp is NaN or Inf
+  input_out_of_domain,    // an input (e.g. a speed or a travelled distance) outside its range
+  non_finite_features,    // a classifier's feature vector holds NaN or Inf
+  feature_magnitude,      // a feature above 1e150 in magnitude (an RBF kernel would overflow)
+  invalid_mass,           // belief masses not finite, negative, or not summing to one
+  total_conflict,         // the evidence sources contradict each other completely (K = 0)
+  zero_likelihood,        // no hidden state can have produced the observation
+  invalid_elevation,      // a satellite elevation infinite or outside [-90, 90] deg
+  invalid_azimuth,        // a satellite azimuth infinite
+  invalid_cn0,            // a satellite C/N0 outside [0, 100] dB-Hz
+  invalid_dop,            // a dilution of precision given but not positive
+  duplicate_satellite,    // one satellite id twice in one epoch
+  invalid_prf,            // a UWB pulse repetition frequency other than 16 or 64 MHz
+  invalid_rxpacc,         // a UWB preamble accumulation count not above zero
+  non_positive_power,     // UWB CIR power, first-path amplitudes or noise give no positive power
   // Construction (core/error.hpp): a check function's verdict on a setting.
   invalid_setting,  // a setting outside its range (shares, weights, probabilities, counts)
 };
@@ -83,7 +102,7 @@ constexpr std::string_view describe(Problem p) {
     case Problem::non_finite_dt: return "time step is NaN or Inf";
     case Problem::non_positive_dt: return "time step is zero or negative";
     case Problem::dt_above_maximum: return "time step above the configured maximum";
-    case Problem::out_of_order_time: return "time stamp earlier than the filter time";
+    case Problem::out_of_order_time: return "time stamp out of order (earlier than the last one, or equal where an interval must be positive)";
     case Problem::time_not_set: return "filter time not set before a timed step";
     case Problem::non_finite_prediction: return "model prediction or Jacobian contains NaN or Inf";
     case Problem::innovation_not_positive_definite: return "innovation covariance is not positive definite";
@@ -100,6 +119,21 @@ constexpr std::string_view describe(Problem p) {
     case Problem::measurement_wrong_size: return "measurement vector has the wrong size for the measurement model";
     case Problem::input_wrong_size: return "process input has the wrong size for the process model";
     case Problem::input_wrong_kind: return "process input is another kind than the process model takes";
+    case Problem::non_finite_time: return "time stamp is NaN or Inf";
+    case Problem::input_out_of_domain: return "input outside its range (e.g. a negative speed or distance)";
+    case Problem::non_finite_features: return "feature vector contains NaN or Inf";
+    case Problem::feature_magnitude: return "feature magnitude above 1e150 (the kernel would overflow)";
+    case Problem::invalid_mass: return "belief masses not finite, negative or not summing to one";
+    case Problem::total_conflict: return "evidence sources contradict each other completely";
+    case Problem::zero_likelihood: return "no hidden state can have produced the observation";
+    case Problem::invalid_elevation: return "satellite elevation infinite or outside [-90, 90] deg";
+    case Problem::invalid_azimuth: return "satellite azimuth infinite";
+    case Problem::invalid_cn0: return "satellite C/N0 outside [0, 100] dB-Hz";
+    case Problem::invalid_dop: return "dilution of precision given but not positive";
+    case Problem::duplicate_satellite: return "satellite id listed twice in one epoch";
+    case Problem::invalid_prf: return "PRF is neither 16 nor 64 MHz";
+    case Problem::invalid_rxpacc: return "preamble accumulation count is not > 0";
+    case Problem::non_positive_power: return "CIR power, first-path amplitudes or noise give no positive power";
     case Problem::invalid_setting: return "a setting is outside its range";
     case Problem::too_few_measurements: return "fewer measurements than unknowns";
     case Problem::degenerate_geometry: return "geometry too poor to solve (nearly singular normal equations)";

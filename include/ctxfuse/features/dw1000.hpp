@@ -18,6 +18,8 @@
 #include <limits>
 #include <string_view>
 
+#include "ctxfuse/core/status.hpp"
+
 namespace ctxfuse::features {
 
 /// The register values of one received frame.
@@ -45,19 +47,6 @@ struct Dw1000Features {
   }
 };
 
-enum class Dw1000Status { ok, invalid_prf, invalid_rxpacc, non_positive_power, non_finite_input };
-
-constexpr std::string_view describe(Dw1000Status s) {
-  switch (s) {
-    case Dw1000Status::ok: return "ok";
-    case Dw1000Status::invalid_prf: return "PRF is neither 16 nor 64 MHz";
-    case Dw1000Status::invalid_rxpacc: return "preamble accumulation count is not > 0";
-    case Dw1000Status::non_positive_power: return "CIR power, first-path amplitudes or noise give no positive power";
-    case Dw1000Status::non_finite_input: return "a register value is NaN or Inf";
-  }
-  return "unknown";
-}
-
 /// The manual's constant A [dB] for a pulse repetition frequency; NaN for any other PRF.
 constexpr double dw1000_power_constant(double prf_mhz) {
   return prf_mhz == 16.0 ? 113.77 : prf_mhz == 64.0 ? 121.74 : std::numeric_limits<double>::quiet_NaN();
@@ -73,14 +62,15 @@ inline double dw1000_rx_power_dbm(double cir_power, double rxpacc, double prf_mh
   return 10.0 * std::log10(cir_power * 131072.0 / (rxpacc * rxpacc)) - dw1000_power_constant(prf_mhz);
 }
 
-/// The five features of one frame; `out` is written only when the status is ok.
-inline Dw1000Status dw1000_features(const Dw1000Diagnostics& d, Dw1000Features& out) {
+/// The five features of one frame into `out` (accepted). Refused, `out` untouched: a register
+/// value NaN or Inf (non_finite_measurement), invalid_prf, invalid_rxpacc, non_positive_power.
+inline Status dw1000_features(const Dw1000Diagnostics& d, Dw1000Features& out) {
   for (double v : {d.range_m, d.fp_amp1, d.fp_amp2, d.fp_amp3, d.cir_power, d.rxpacc, d.std_noise, d.prf_mhz})
-    if (!std::isfinite(v)) return Dw1000Status::non_finite_input;
-  if (std::isnan(dw1000_power_constant(d.prf_mhz))) return Dw1000Status::invalid_prf;
-  if (!(d.rxpacc > 0.0)) return Dw1000Status::invalid_rxpacc;
+    if (!std::isfinite(v)) return Status::invalid(Problem::non_finite_measurement);
+  if (std::isnan(dw1000_power_constant(d.prf_mhz))) return Status::invalid(Problem::invalid_prf);
+  if (!(d.rxpacc > 0.0)) return Status::invalid(Problem::invalid_rxpacc);
   const double fp_sum = d.fp_amp1 * d.fp_amp1 + d.fp_amp2 * d.fp_amp2 + d.fp_amp3 * d.fp_amp3;
-  if (!(d.cir_power > 0.0) || !(fp_sum > 0.0) || !(d.std_noise > 0.0)) return Dw1000Status::non_positive_power;
+  if (!(d.cir_power > 0.0) || !(fp_sum > 0.0) || !(d.std_noise > 0.0)) return Status::invalid(Problem::non_positive_power);
   const double a = dw1000_power_constant(d.prf_mhz), n2 = d.rxpacc * d.rxpacc;
   Dw1000Features f;
   f.rx_power_dbm = dw1000_rx_power_dbm(d.cir_power, d.rxpacc, d.prf_mhz);
@@ -89,7 +79,7 @@ inline Dw1000Status dw1000_features(const Dw1000Diagnostics& d, Dw1000Features& 
   f.noise_dbm = 10.0 * std::log10(d.std_noise * d.std_noise / n2) - a;
   f.range_m = d.range_m;
   out = f;
-  return Dw1000Status::ok;
+  return Status{};
 }
 
 }  // namespace ctxfuse::features

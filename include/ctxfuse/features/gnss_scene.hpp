@@ -36,10 +36,12 @@
 #include <limits>
 #include <numbers>
 #include <span>
-#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "ctxfuse/core/error.hpp"
+#include "ctxfuse/core/status.hpp"
 
 namespace ctxfuse::features {
 
@@ -82,33 +84,6 @@ struct GnssSceneConfig {
   /// Above this PDOP the geometry is called degenerate and PDOP is filled.
   double max_pdop = 100.0;
 };
-
-enum class GnssFeatureStatus {
-  ok,
-  non_finite_time,
-  time_not_increasing,
-  too_many_satellites,
-  invalid_elevation,   // infinite or outside [-90, 90] (NaN is allowed: unknown)
-  invalid_azimuth,     // infinite (NaN is allowed: unknown)
-  invalid_cn0,         // negative or above 100 dB-Hz (NaN is allowed: not tracked)
-  invalid_pdop,        // given but negative or zero
-  duplicate_satellite,
-};
-
-constexpr std::string_view describe(GnssFeatureStatus s) {
-  switch (s) {
-    case GnssFeatureStatus::ok: return "ok";
-    case GnssFeatureStatus::non_finite_time: return "epoch time is NaN or Inf";
-    case GnssFeatureStatus::time_not_increasing: return "epoch time not after the previous epoch";
-    case GnssFeatureStatus::too_many_satellites: return "more satellites than the extractor's capacity";
-    case GnssFeatureStatus::invalid_elevation: return "satellite elevation infinite or outside [-90, 90] deg";
-    case GnssFeatureStatus::invalid_azimuth: return "satellite azimuth infinite";
-    case GnssFeatureStatus::invalid_cn0: return "satellite C/N0 outside [0, 100] dB-Hz";
-    case GnssFeatureStatus::invalid_pdop: return "PDOP given but not positive";
-    case GnssFeatureStatus::duplicate_satellite: return "satellite id listed twice in one epoch";
-  }
-  return "unknown";
-}
 
 /// True when the satellite's elevation and azimuth are both known.
 inline bool has_geometry(const SatelliteObservation& s) { return std::isfinite(s.elevation_deg) && std::isfinite(s.azimuth_deg); }
@@ -159,11 +134,14 @@ class GnssSceneExtractor {
   static_assert(MaxSatellites >= 1 && WindowCapacity >= 2);
 
  public:
+  /// Problem::invalid_setting unless both windows are finite and > 0 (the constructor's check).
+  static Problem check(const GnssSceneConfig& c) {
+    const auto positive = [](double w) { return w > 0.0 && std::isfinite(w); };
+    return positive(c.window_s) && positive(c.cn0_window_s) ? Problem::none : Problem::invalid_setting;
+  }
   explicit GnssSceneExtractor(GnssSceneConfig config = {}) : config_(config) {
-    if (!(config_.window_s > 0.0 && std::isfinite(config_.window_s)))
-      throw std::invalid_argument("GnssSceneExtractor: window_s must be finite and > 0");
-    if (!(config_.cn0_window_s > 0.0 && std::isfinite(config_.cn0_window_s)))
-      throw std::invalid_argument("GnssSceneExtractor: cn0_window_s must be finite and > 0");
+    if (check(config_) != Problem::none)
+      ctxfuse::detail::invalid_setting("GnssSceneExtractor: window_s and cn0_window_s must be finite and > 0");
   }
 
   void reset() {
@@ -171,10 +149,10 @@ class GnssSceneExtractor {
     head_ = 0;
   }
 
-  /// Computes the features of `epoch` into `out`. On any status other than ok, `out` and the
-  /// extractor's history are left unchanged.
-  GnssFeatureStatus push(const GnssEpoch& epoch, GnssSceneFeatures& out) {
-    if (const auto s = validate(epoch); s != GnssFeatureStatus::ok) return s;
+  /// Computes the features of `epoch` into `out` (accepted). Refused (invalid input, with the
+  /// Problem naming the field): `out` and the extractor's history are left unchanged.
+  Status push(const GnssEpoch& epoch, GnssSceneFeatures& out) {
+    if (const Status s = validate(epoch); !s) return s;
     const double fill = config_.fill_value;
 
     // Store the epoch in the ring first: window statistics include it.
@@ -218,7 +196,7 @@ class GnssSceneExtractor {
       f[F::mean_cn0_std] = std::isfinite(cs) ? cs : fill;
     }
     out = f;
-    return GnssFeatureStatus::ok;
+    return Status{};
   }
 
   const GnssSceneConfig& config() const { return config_; }
@@ -232,24 +210,24 @@ class GnssSceneExtractor {
     std::array<double, MaxSatellites> cn0{};
   };
 
-  GnssFeatureStatus validate(const GnssEpoch& epoch) const {
-    if (!std::isfinite(epoch.time_s)) return GnssFeatureStatus::non_finite_time;
-    if (size_ > 0 && !(epoch.time_s > newest().time)) return GnssFeatureStatus::time_not_increasing;
+  Status validate(const GnssEpoch& epoch) const {
+    if (!std::isfinite(epoch.time_s)) return Status::invalid(Problem::non_finite_time);
+    if (size_ > 0 && !(epoch.time_s > newest().time)) return Status::invalid(Problem::out_of_order_time);
     if (epoch.satellites.size() > static_cast<std::size_t>(MaxSatellites))
-      return GnssFeatureStatus::too_many_satellites;
+      return Status::invalid(Problem::measurement_count_above_capacity);
     if (!std::isnan(epoch.pdop) && !(epoch.pdop > 0.0 && std::isfinite(epoch.pdop)))
-      return GnssFeatureStatus::invalid_pdop;
+      return Status::invalid(Problem::invalid_dop);
     for (std::size_t i = 0; i < epoch.satellites.size(); ++i) {
       const auto& s = epoch.satellites[i];
-      if (!std::isnan(s.elevation_deg) && !(std::abs(s.elevation_deg) <= 90.0)) return GnssFeatureStatus::invalid_elevation;
-      if (std::isinf(s.azimuth_deg)) return GnssFeatureStatus::invalid_azimuth;
+      if (!std::isnan(s.elevation_deg) && !(std::abs(s.elevation_deg) <= 90.0)) return Status::invalid(Problem::invalid_elevation);
+      if (std::isinf(s.azimuth_deg)) return Status::invalid(Problem::invalid_azimuth);
       if (!std::isnan(s.cn0_dbhz) && !(s.cn0_dbhz >= 0.0 && s.cn0_dbhz <= 100.0))
-        return GnssFeatureStatus::invalid_cn0;
+        return Status::invalid(Problem::invalid_cn0);
       // Quadratic, but epochs hold a few dozen satellites and this keeps the step allocation-free.
       for (std::size_t j = 0; j < i; ++j)
-        if (epoch.satellites[j].id == s.id) return GnssFeatureStatus::duplicate_satellite;
+        if (epoch.satellites[j].id == s.id) return Status::invalid(Problem::duplicate_satellite);
     }
-    return GnssFeatureStatus::ok;
+    return Status{};
   }
 
   const Record& at_age(int age) const {  // age 0 = newest
@@ -323,19 +301,26 @@ class GnssSceneExtractor {
   int head_ = 0;
 };
 
-/// Batch form: features of every epoch in order. Throws std::invalid_argument naming the epoch
-/// index and the problem on the first invalid epoch.
+/// Features of a whole batch of epochs, or why not.
+struct GnssSceneBatch {
+  std::vector<GnssSceneFeatures> features;  // one per epoch when accepted; empty when refused
+  Status status{};                          // the first refused epoch's Status
+  std::size_t refused_at = 0;               // that epoch's index
+};
+
+/// Batch form: features of every epoch in order; the first invalid epoch refuses the batch.
 template <int MaxSatellites = 128, int WindowCapacity = 32>
-std::vector<GnssSceneFeatures> gnss_scene_features(std::span<const GnssEpoch> epochs,
-                                                   const GnssSceneConfig& config = {}) {
+GnssSceneBatch gnss_scene_features(std::span<const GnssEpoch> epochs, const GnssSceneConfig& config = {}) {
   GnssSceneExtractor<MaxSatellites, WindowCapacity> extractor(config);
-  std::vector<GnssSceneFeatures> out(epochs.size());
+  GnssSceneBatch out;
+  out.features.resize(epochs.size());
   for (std::size_t i = 0; i < epochs.size(); ++i) {
-    const auto status = extractor.push(epochs[i], out[i]);
-    if (status != GnssFeatureStatus::ok)
-      throw std::invalid_argument("gnss_scene_features: epoch " + std::to_string(i) + " (t = " +
-                                  std::to_string(epochs[i].time_s) + " s): " +
-                                  std::string(describe(status)));
+    if (const Status status = extractor.push(epochs[i], out.features[i]); !status) {
+      out.features.clear();
+      out.status = status;
+      out.refused_at = i;
+      return out;
+    }
   }
   return out;
 }

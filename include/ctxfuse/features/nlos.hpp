@@ -8,8 +8,9 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <stdexcept>
-#include <string_view>
+
+#include "ctxfuse/core/error.hpp"
+#include "ctxfuse/core/status.hpp"
 
 namespace ctxfuse::features {
 
@@ -27,34 +28,10 @@ struct NlosFeatures {
   double travelled_distance_m = std::numeric_limits<double>::quiet_NaN();  // d_d
   double consistency_error_m = std::numeric_limits<double>::quiet_NaN();  // |d_rho| - d_d
   double rssi_minus_first_path_db = std::numeric_limits<double>::quiet_NaN();
+  /// False on an anchor's first sample: the rate-type features (range rate, range change,
+  /// travelled distance, consistency error) need a previous range and stay NaN.
+  bool has_previous_sample = false;
 };
-
-enum class NlosFeatureStatus {
-  ok,
-  first_sample,        // stored; rate-type features need a previous range (they stay NaN)
-  non_finite_time,
-  non_finite_range,
-  negative_range,
-  range_too_large,     // above max_range_m
-  time_not_increasing,
-  invalid_speed,       // NaN/Inf, negative, or above max_speed_mps
-  invalid_distance,    // travelled distance NaN/Inf or negative
-};
-
-constexpr std::string_view describe(NlosFeatureStatus s) {
-  switch (s) {
-    case NlosFeatureStatus::ok: return "ok";
-    case NlosFeatureStatus::first_sample: return "first sample of the anchor: no range rate yet";
-    case NlosFeatureStatus::non_finite_time: return "sample time is NaN or Inf";
-    case NlosFeatureStatus::non_finite_range: return "range is NaN or Inf";
-    case NlosFeatureStatus::negative_range: return "range is negative";
-    case NlosFeatureStatus::range_too_large: return "range above the configured maximum";
-    case NlosFeatureStatus::time_not_increasing: return "sample time not after the previous sample";
-    case NlosFeatureStatus::invalid_speed: return "vehicle speed NaN/Inf, negative or above the maximum";
-    case NlosFeatureStatus::invalid_distance: return "travelled distance NaN/Inf or negative";
-  }
-  return "unknown";
-}
 
 class NlosFeatureExtractor {
  public:
@@ -64,42 +41,46 @@ class NlosFeatureExtractor {
   void reset() { has_previous_ = false; }
 
   /// Features of `sample` given the vehicle speed and the distance travelled since the
-  /// anchor's previous sample (e.g. integrated odometry/INS speed). On an error status the
-  /// extractor keeps its previous sample and `out` is untouched.
-  NlosFeatureStatus push(const UwbRangeSample& sample, double vehicle_speed_mps,
-                         double travelled_distance_m, NlosFeatures& out) {
-    if (!std::isfinite(sample.time_s)) return NlosFeatureStatus::non_finite_time;
-    if (!std::isfinite(sample.range_m)) return NlosFeatureStatus::non_finite_range;
-    if (sample.range_m < 0.0) return NlosFeatureStatus::negative_range;
-    if (sample.range_m > max_range_m) return NlosFeatureStatus::range_too_large;
-    if (!(vehicle_speed_mps >= 0.0 && vehicle_speed_mps <= max_speed_mps))
-      return NlosFeatureStatus::invalid_speed;
-    if (!(travelled_distance_m >= 0.0) || !std::isfinite(travelled_distance_m))
-      return NlosFeatureStatus::invalid_distance;
-    if (has_previous_ && !(sample.time_s > previous_.time_s)) return NlosFeatureStatus::time_not_increasing;
+  /// anchor's previous sample (e.g. integrated odometry/INS speed). Accepted: `out` holds the
+  /// features (out.has_previous_sample false on the anchor's first sample). Refused (invalid
+  /// input; the extractor keeps its previous sample and `out` is untouched):
+  ///   non_finite_time, non_finite_measurement (range), measurement_out_of_domain (negative
+  ///   range), measurement_magnitude (range above max_range_m), non_finite_input (speed or
+  ///   distance), input_out_of_domain (speed negative or above max_speed_mps, distance
+  ///   negative), out_of_order_time (time not after the previous sample's).
+  Status push(const UwbRangeSample& sample, double vehicle_speed_mps, double travelled_distance_m,
+              NlosFeatures& out) {
+    if (!std::isfinite(sample.time_s)) return Status::invalid(Problem::non_finite_time);
+    if (!std::isfinite(sample.range_m)) return Status::invalid(Problem::non_finite_measurement);
+    if (sample.range_m < 0.0) return Status::invalid(Problem::measurement_out_of_domain);
+    if (sample.range_m > max_range_m) return Status::invalid(Problem::measurement_magnitude);
+    if (!std::isfinite(vehicle_speed_mps) || !std::isfinite(travelled_distance_m))
+      return Status::invalid(Problem::non_finite_input);
+    if (!(vehicle_speed_mps >= 0.0 && vehicle_speed_mps <= max_speed_mps) || !(travelled_distance_m >= 0.0))
+      return Status::invalid(Problem::input_out_of_domain);
+    if (has_previous_ && !(sample.time_s > previous_.time_s)) return Status::invalid(Problem::out_of_order_time);
 
     NlosFeatures f;
     f.vehicle_speed_mps = vehicle_speed_mps;
     f.rssi_minus_first_path_db = sample.rssi_dbm - sample.first_path_rssi_dbm;
     if (!std::isfinite(f.rssi_minus_first_path_db))
       f.rssi_minus_first_path_db = std::numeric_limits<double>::quiet_NaN();
-    NlosFeatureStatus status = NlosFeatureStatus::first_sample;
     if (has_previous_) {
       const double dt = sample.time_s - previous_.time_s;
       f.range_change_m = sample.range_m - previous_.range_m;
       f.range_rate_mps = f.range_change_m / dt;
       f.travelled_distance_m = travelled_distance_m;
       f.consistency_error_m = std::abs(f.range_change_m) - travelled_distance_m;
-      status = NlosFeatureStatus::ok;
+      f.has_previous_sample = true;
     }
     previous_ = sample;
     has_previous_ = true;
     out = f;
-    return status;
+    return {};
   }
 
   /// Same, with the travelled distance taken as speed * dt (constant speed between samples).
-  NlosFeatureStatus push(const UwbRangeSample& sample, double vehicle_speed_mps, NlosFeatures& out) {
+  Status push(const UwbRangeSample& sample, double vehicle_speed_mps, NlosFeatures& out) {
     const double dt = has_previous_ ? sample.time_s - previous_.time_s : 0.0;
     const double distance = (std::isfinite(dt) && dt > 0.0) ? vehicle_speed_mps * dt : 0.0;
     return push(sample, vehicle_speed_mps, std::isfinite(distance) ? distance : 0.0, out);
@@ -133,16 +114,22 @@ class RangeWindowFeatures {
     int samples = 0;
   };
 
+  /// Problem::invalid_setting unless 1 <= window <= Capacity (the constructor's check).
+  static constexpr Problem check(int window) {
+    return window >= 1 && window <= Capacity ? Problem::none : Problem::invalid_setting;
+  }
   explicit RangeWindowFeatures(int window = 10) : window_(window) {
-    if (window < 1 || window > Capacity)
-      throw std::invalid_argument("RangeWindowFeatures: window must be in [1, Capacity]");
+    if (check(window) != Problem::none)
+      ctxfuse::detail::invalid_setting("RangeWindowFeatures: window must be in [1, Capacity]");
   }
 
   void reset() { size_ = head_ = 0; }
 
-  /// Adds one range; returns false (and changes nothing) when a value is not finite.
-  bool push(double residual_m, double rssi_dbm, double first_path_rssi_dbm, Output& out) {
-    if (!std::isfinite(residual_m) || !std::isfinite(rssi_dbm) || !std::isfinite(first_path_rssi_dbm)) return false;
+  /// Adds one range and writes the window's statistics (accepted); a value that is not finite
+  /// is refused (Problem::non_finite_measurement) and changes nothing.
+  Status push(double residual_m, double rssi_dbm, double first_path_rssi_dbm, Output& out) {
+    if (!std::isfinite(residual_m) || !std::isfinite(rssi_dbm) || !std::isfinite(first_path_rssi_dbm))
+      return Status::invalid(Problem::non_finite_measurement);
     residual_[head_] = residual_m;
     rssi_[head_] = rssi_dbm;
     diff_[head_] = rssi_dbm - first_path_rssi_dbm;
@@ -162,7 +149,7 @@ class RangeWindowFeatures {
     for (int i = 0; i < size_; ++i) sq += (residual_[i] - o.residual_mean_m) * (residual_[i] - o.residual_mean_m);
     o.residual_std_m = std::sqrt(sq / size_);
     out = o;
-    return true;
+    return {};
   }
 
   int window() const { return window_; }

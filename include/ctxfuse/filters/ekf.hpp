@@ -49,7 +49,7 @@ Status predict(const Model& model, Gaussian<Model::dim>& belief, const typename 
 }
 
 /// Measurement update with gating. x+ = x + K (z - h(x)), Joseph-form covariance.
-template <int N, class Meas, class Gate = NoGate>
+template <int N, class Meas, class Gate = policies::NoGate>
   requires MeasurementModel<Meas, Vector<N>, N> && GatePolicy<Gate>
 Status update(const Meas& meas, Gaussian<N>& belief, const Vector<Meas::dim>& z, const Gate& gate = {},
               const FilterOptions& opts = {}) {
@@ -88,7 +88,7 @@ Status predict(const Model& model, Gaussian<Model::dim>& belief, const U& u, dou
   return with_size_checked<In>(u, Problem::input_wrong_size,
                                [&](const In& f) { return predict(model, belief, f, dt, opts, F_used); });
 }
-template <int N, class Meas, DynamicSizeEigen Z, class Gate = NoGate>
+template <int N, class Meas, DynamicSizeEigen Z, class Gate = policies::NoGate>
   requires MeasurementModel<Meas, Vector<N>, N> && GatePolicy<Gate>
 Status update(const Meas& meas, Gaussian<N>& belief, const Z& z, const Gate& gate = {}, const FilterOptions& opts = {}) {
   return with_size_checked<Vector<Meas::dim>>(z, Problem::measurement_wrong_size, [&](const Vector<Meas::dim>& f) {
@@ -113,7 +113,7 @@ struct EkfSteps {
 };
 
 /// Stateful EKF: belief + clock + gate around the ekf:: steps.
-template <VectorProcessModel Model, GatePolicy Gate = NoGate>
+template <VectorProcessModel Model, GatePolicy Gate = policies::NoGate>
 class Ekf : public detail::StatefulFilter<Model, Gate, Gaussian<Model::dim>, EkfSteps> {
   using Base = detail::StatefulFilter<Model, Gate, Gaussian<Model::dim>, EkfSteps>;
 

@@ -126,7 +126,7 @@ Status update_into(const Model& model, const Meas& meas, const Belief<Model>& in
 
 /// Correction, injection and reset. `dx_applied`, when given, receives the injected error.
 /// The belief is written only once everything has succeeded.
-template <ErrorStateProcessModel Model, class Meas, class Gate = NoGate>
+template <ErrorStateProcessModel Model, class Meas, class Gate = policies::NoGate>
   requires MeasurementModel<Meas, typename Model::State, Model::dim> && GatePolicy<Gate>
 Status update(const Model& model, const Meas& meas, Belief<Model>& belief, const Vector<Meas::dim>& z,
               const Gate& gate = {}, const FilterOptions& opts = {}, Vector<Model::dim>* dx_applied = nullptr) {
@@ -146,7 +146,7 @@ Status predict(const Model& model, Belief<Model>& belief, const U& u, double dt,
   return with_size_checked<In>(u, Problem::input_wrong_size,
                                [&](const In& f) { return predict(model, belief, f, dt, opts, F_used); });
 }
-template <ErrorStateProcessModel Model, class Meas, DynamicSizeEigen Z, class Gate = NoGate>
+template <ErrorStateProcessModel Model, class Meas, DynamicSizeEigen Z, class Gate = policies::NoGate>
   requires MeasurementModel<Meas, typename Model::State, Model::dim> && GatePolicy<Gate>
 Status update(const Model& model, const Meas& meas, Belief<Model>& belief, const Z& z, const Gate& gate = {},
               const FilterOptions& opts = {}, Vector<Model::dim>* dx_applied = nullptr) {
@@ -172,7 +172,7 @@ struct EskfSteps {
 };
 
 /// Stateful error-state EKF: belief + clock + gate around the eskf:: steps.
-template <ErrorStateProcessModel Model, GatePolicy Gate = NoGate>
+template <ErrorStateProcessModel Model, GatePolicy Gate = policies::NoGate>
 class Eskf : public detail::StatefulFilter<Model, Gate, eskf::Belief<Model>, EskfSteps> {
   using Base = detail::StatefulFilter<Model, Gate, eskf::Belief<Model>, EskfSteps>;
 

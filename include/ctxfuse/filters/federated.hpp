@@ -81,7 +81,7 @@ Status fuse(const Model& model, const std::array<Gaussian<N>, L>& locals, Gaussi
 }
 
 /// L local EKFs and the master fusion with reset.
-template <VectorProcessModel Model, int L, GatePolicy Gate = NoGate>
+template <VectorProcessModel Model, int L, GatePolicy Gate = policies::NoGate>
 class FederatedFilter {
  public:
   static constexpr int N = Model::dim;

@@ -34,7 +34,7 @@ struct AcceptsAll {
 };
 
 /// One mode of the IMM: a process model (its own process noise), the tags it takes, a gate.
-template <ProcessModel Model, class Taken = AcceptsAll, GatePolicy Gate = NoGate>
+template <ProcessModel Model, class Taken = AcceptsAll, GatePolicy Gate = policies::NoGate>
 struct Mode {
   using ProcessModelType = Model;
   using TakenTags = Taken;
@@ -43,7 +43,7 @@ struct Mode {
   Gate gate{};
 };
 
-template <class Model, class Taken = AcceptsAll, class Gate = NoGate>
+template <class Model, class Taken = AcceptsAll, class Gate = policies::NoGate>
 Mode<Model, Taken, Gate> make_mode(Model model, Taken = {}, Gate gate = {}) {
   return {std::move(model), std::move(gate)};
 }
@@ -85,7 +85,7 @@ constexpr bool is_hana_tuple() {
 template <int N, class Meas, class B, int M>
 Status score_prediction(const Meas& meas, const B& belief, const Vector<M>& z, const FilterOptions& options) {
   static_assert(std::remove_cvref_t<decltype(belief.cov)>::RowsAtCompileTime == N);
-  Status s = ctxfuse::score(meas, belief, z, NoGate{}, options);
+  Status s = ctxfuse::score(meas, belief, z, policies::NoGate{}, options);
   if (s.accepted()) s.outcome = Outcome::gated;
   return s;
 }

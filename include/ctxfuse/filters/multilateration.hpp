@@ -22,7 +22,7 @@
 #include "ctxfuse/core/status.hpp"
 #include "ctxfuse/messages/sensors.hpp"
 
-namespace ctxfuse::filters {
+namespace ctxfuse {
 
 struct MultilaterationOptions {
   double tag_height_m = 1.0;  // tag z in the anchors' frame
@@ -163,4 +163,4 @@ Multilateration3d multilaterate_3d(std::span<const messages::UwbRange> ranges, c
   return best;
 }
 
-}  // namespace ctxfuse::filters
+}  // namespace ctxfuse

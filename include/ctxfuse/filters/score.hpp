@@ -31,7 +31,7 @@ const auto& belief_point(const B& b) {
 /// let the measurement through, `gated` when it would refuse it, with `nis`, `gate_threshold`,
 /// `log_likelihood` and `dof` filled in; `invalid_input` and `numerical_failure` with the same
 /// Problem the update would name. `belief` is a Gaussian (EKF) or an error-state belief (ESKF).
-template <class Meas, class B, GatePolicy Gate = NoGate>
+template <class Meas, class B, GatePolicy Gate = policies::NoGate>
 Status score(const Meas& meas, const B& belief, const Vector<Meas::dim>& z, const Gate& gate = {},
              const FilterOptions& opts = {}) {
   constexpr int M = Meas::dim;
@@ -58,7 +58,7 @@ Status score(const Meas& meas, const B& belief, const Vector<Meas::dim>& z, cons
 
 /// z of a size known only at run time: refused with measurement_wrong_size unless it is
 /// Meas::dim x 1 (core/validation.hpp).
-template <class Meas, class B, DynamicSizeEigen Z, GatePolicy Gate = NoGate>
+template <class Meas, class B, DynamicSizeEigen Z, GatePolicy Gate = policies::NoGate>
 Status score(const Meas& meas, const B& belief, const Z& z, const Gate& gate = {}, const FilterOptions& opts = {}) {
   return with_size_checked<Vector<Meas::dim>>(z, Problem::measurement_wrong_size,
                                               [&](const Vector<Meas::dim>& fixed) { return score(meas, belief, fixed, gate, opts); });

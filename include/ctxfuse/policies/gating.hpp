@@ -8,7 +8,7 @@
 
 #include "ctxfuse/core/numerics.hpp"
 
-namespace ctxfuse {
+namespace ctxfuse::policies {
 
 /// Every measurement passes.
 struct NoGate {
@@ -44,4 +44,4 @@ struct FixedThresholdGate {
   constexpr double threshold(int /*dof*/) const { return max_nis; }
 };
 
-}  // namespace ctxfuse
+}  // namespace ctxfuse::policies

@@ -84,16 +84,6 @@ inline Eigen::Vector3d earth_field_enu(const MagnetometerConfig& c) {
 
 namespace detail {
 
-/// Three standard normals in x, y, z order. Never write Vector3d(rng.normal(), ...): the
-/// evaluation order of constructor arguments is unspecified (g++ and clang differ), which
-/// would break same-seed-same-bytes across compilers.
-inline Eigen::Vector3d normal3(Rng& rng) {
-  Eigen::Vector3d v;
-  v.x() = rng.normal();
-  v.y() = rng.normal();
-  v.z() = rng.normal();
-  return v;
-}
 
 inline void check_config(const DriveConfig& c) {
   auto bad = [](const std::string& what) { throw std::invalid_argument("sim DriveConfig: " + what); };
@@ -344,7 +334,7 @@ inline void simulate_gnss(Drive& d) {
       e.hdop = hdop;
     }
     const auto env = static_cast<std::size_t>(gnss_environment(e.region, e.scene));
-    const Eigen::Vector3d white = detail::normal3(rng);
+    const Eigen::Vector3d white = rng.normals<3>();
     if (geometry_ok && e.region != Region::indoor) {
       const double sh = c.uere_m[env] * hdop / std::sqrt(2.0), sv = c.uere_m[env] * vdop;
       const double mp = c.multipath_sigma_m[env];
@@ -484,7 +474,7 @@ inline void simulate_magnetometer(Drive& d) {
     at.x() = rng.uniform(x0 - 20.0, x1 + 20.0);
     at.y() = rng.uniform(y0 - 20.0, y1 + 20.0);
     const double amp = world.region_at(at) == Region::indoor ? c.anomaly_indoor_ut : c.anomaly_near_ut;
-    anomalies.push_back({at, amp * detail::normal3(rng)});
+    anomalies.push_back({at, amp * rng.normals<3>()});
   }
   const Eigen::Vector3d earth = earth_field_enu(c);
   const double two_l2 = 2.0 * c.anomaly_length_m * c.anomaly_length_m;

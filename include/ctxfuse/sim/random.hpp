@@ -4,6 +4,8 @@
 // that a seed reproduces the same bytes with any conforming compiler and library.
 #pragma once
 
+#include <Eigen/Core>
+
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -45,6 +47,16 @@ class Rng {
     return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
   }
   double normal(double mean, double stddev) { return mean + stddev * normal(); }
+
+  /// N standard normals drawn in index order. Not Vector(normal(), normal(), ...): the order in
+  /// which a call's arguments are evaluated is unspecified (g++ goes right to left, clang left
+  /// to right), so the same seed would give each compiler another run.
+  template <int N>
+  Eigen::Matrix<double, N, 1> normals() {
+    Eigen::Matrix<double, N, 1> v;
+    for (int i = 0; i < N; ++i) v(i) = normal();
+    return v;
+  }
 
  private:
   std::mt19937_64 engine_;

@@ -39,7 +39,7 @@ inline SceneSamples scene_samples(const sim::Drive& d) {
     for (const auto& s : d.satellites_of(e)) sats.push_back({s.sat_id, s.elevation_deg, s.azimuth_deg, s.cn0_dbhz});
     features::GnssEpoch epoch{e.t, sats, e.pdop < 0.0 ? std::numeric_limits<double>::quiet_NaN() : e.pdop};
     features::GnssSceneFeatures f;
-    if (extractor.push(epoch, f) != features::GnssFeatureStatus::ok) f.fill(-1.0);
+    if (!extractor.push(epoch, f)) f.fill(-1.0);
     out.x.push_back(f);
     out.scene.push_back(static_cast<int>(e.scene));
   }
@@ -79,7 +79,7 @@ std::vector<policies::SceneProbabilities> scene_probabilities(const SceneSvm& sv
     for (int j = 0; j < features::kGnssSceneFeatureCount; ++j) x(j) = f[static_cast<std::size_t>(j)];
     classify::SvmPrediction<3> pred;
     policies::SceneProbabilities p{};
-    if (classify::svm_predict(svm, x, pred) != classify::SvmStatus::ok || !pred.has_probabilities) {
+    if (!classify::svm_predict(svm, x, pred) || !pred.has_probabilities) {
       p.fill(std::numeric_limits<double>::quiet_NaN());
     } else {
       for (int c = 0; c < svm.num_classes; ++c) {

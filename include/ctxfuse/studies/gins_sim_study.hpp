@@ -235,7 +235,7 @@ GinsSimRun run_gins_sim(const GinsSimDrive& d, const sim::ImuConfig& imu, const 
   sd << 2, 2, 3, 0.1, 0.1, 0.1, 0.5 * deg, 0.5 * deg, 2 * deg, Eigen::Vector3d::Constant(imu.gyro_bias_sigma),
       Eigen::Vector3d::Constant(imu.accel_bias_sigma), s.speed_scale_sigma.value_or(d.speed_scale_sigma);
   b.cov = sd.cwiseAbs2().asDiagonal();
-  const ChiSquareGate gate(s.gate_probability);
+  const policies::ChiSquareGate gate(s.gate_probability);
   policies::SourceHealth gnss_health(s.gate_release);
   OdometerStaticDecision motion(d.speed_noise);
   models::GnssGeodeticPosition<S> gnss;

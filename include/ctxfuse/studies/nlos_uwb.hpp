@@ -201,9 +201,9 @@ pipelines::nlos_uwb::Track run_nlos_uwb_variant(std::size_t index, std::span<con
                                                 const pipelines::nlos_uwb::NlosClassifier& classifier,
                                                 const pipelines::nlos_uwb::Settings& s) {
   namespace nu = pipelines::nlos_uwb;
-  using Calibrated = nu::CalibratedRangeEkf<ChiSquareGate, false, nu::NlosClassifier::kMaxAnchors>;
-  using CalibratedLag = nu::CalibratedRangeEkf<ChiSquareGate, true, nu::NlosClassifier::kMaxAnchors>;
-  using Lagged = nu::RangeSmoother<10, ChiSquareGate, 9>;
+  using Calibrated = nu::CalibratedRangeEkf<policies::ChiSquareGate, false, nu::NlosClassifier::kMaxAnchors>;
+  using CalibratedLag = nu::CalibratedRangeEkf<policies::ChiSquareGate, true, nu::NlosClassifier::kMaxAnchors>;
+  using Lagged = nu::RangeSmoother<10, policies::ChiSquareGate, 9>;
   switch (index) {
     case 0: return nu::run(rs, nu::RangeEkf<>(s), nu::PaperEpochRule{}, classifier, s);
     case 1: return nu::run(rs, nu::RangeEkf<>(s), nu::PerRangeRule{}, classifier, s);
@@ -218,8 +218,8 @@ pipelines::nlos_uwb::Track run_nlos_uwb_variant(std::size_t index, std::span<con
     case 10: return nu::run(rs, nu::RangeSmoother<>(s), nu::NoNlosHandling{}, classifier, s);
     case 11: return nu::run(rs, Lagged(s), nu::NoNlosHandling{}, classifier, s);
     case 12: return nu::run(rs, Lagged(s), nu::PaperEpochRule{}, classifier, s);
-    case 13: return nu::run(rs, nu::RangeEkf<NoGate>(s), nu::PaperEpochRule{}, classifier, s);
-    case 14: return nu::run(rs, nu::RangeEkf<NoGate>(s), nu::NoNlosHandling{}, classifier, s);
+    case 13: return nu::run(rs, nu::RangeEkf<policies::NoGate>(s), nu::PaperEpochRule{}, classifier, s);
+    case 14: return nu::run(rs, nu::RangeEkf<policies::NoGate>(s), nu::NoNlosHandling{}, classifier, s);
     case 15: return nu::least_squares_track(rs, s);
     case 16: return nu::run(rs, nu::MotionModelOnly(s), nu::NoNlosHandling{}, classifier, s);
     default: throw std::invalid_argument("no variant " + std::to_string(index));

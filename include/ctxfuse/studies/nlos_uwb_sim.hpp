@@ -166,7 +166,7 @@ void score_identification(const pipelines::nlos_uwb::Track& track, const Labelle
     const auto& v = rec.verdict;
     if (std::isfinite(rec.input.range_rate_mps)) {
       classify::SvmPrediction<2> out;
-      if (classify::svm_predict(svm_vu, Eigen::Matrix<double, 1, 1>(rec.input.range_rate_mps), out) == classify::SvmStatus::ok &&
+      if (classify::svm_predict(svm_vu, Eigen::Matrix<double, 1, 1>(rec.input.range_rate_mps), out).accepted() &&
           out.has_probabilities)
         vu.add(y, out.probabilities[svm_vu.labels[0] == nu::kNlosLabel ? 0 : 1] > 0.5);
     }
@@ -278,7 +278,7 @@ NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::uint64_t 
   for (const auto& e : ls.estimates) times.push_back(e.t);
   add(kNlosSimVariants[0], imu_only_track(d, rep.span_start, times), 0);
   add_run(kNlosSimVariants[1], ls);
-  using Graph = nu::RangeSmoother<10, NoGate>;
+  using Graph = nu::RangeSmoother<10, policies::NoGate>;
   add_run(kNlosSimVariants[2], nu::run(rs, Graph(s), nu::NoNlosHandling{}, classifier, s));
   add_run(kNlosSimVariants[3], nu::run(rs, Graph(s), nu::PaperEpochRule{}, classifier, s));
   add_run(kNlosSimVariants[4], nu::run(rs, nu::RangeSmoother<>(s), nu::NoNlosHandling{}, classifier, s));
@@ -289,13 +289,13 @@ NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::uint64_t 
   add_run(kNlosSimVariants[8], nu::run(rs, nu::RangeEkf<>(s), nu::NoNlosHandling{}, classifier, s));
   const std::vector<messages::ImuSample>& imu = d.imu;
   const nu::ImuFusionSettings sheet = imu_fusion_settings(d.config.imu);
-  using ImuGraph = nu::ImuRangeSmoother<10, NoGate>;
+  using ImuGraph = nu::ImuRangeSmoother<10, policies::NoGate>;
   add_run(kNlosSimVariants[9], nu::run(std::span<const messages::ImuSample>(imu), rs, ImuGraph(s, sheet), nu::NoNlosHandling{}, classifier, s));
   add_run(kNlosSimVariants[10], nu::run(std::span<const messages::ImuSample>(imu), rs, ImuGraph(s, sheet), nu::PaperEpochRule{}, classifier, s));
   add_run(kNlosSimVariants[11], nu::run(std::span<const messages::ImuSample>(imu), rs, nu::ImuRangeSmoother<>(s, sheet), nu::PaperEpochRule{},
                                         classifier, s));
   add_run(kNlosSimVariants[12],
-          nu::run(std::span<const messages::ImuSample>(imu), rs, nu::ImuRangeEkf<NoGate>(s, sheet), nu::PaperEpochRule{}, classifier, s));
+          nu::run(std::span<const messages::ImuSample>(imu), rs, nu::ImuRangeEkf<policies::NoGate>(s, sheet), nu::PaperEpochRule{}, classifier, s));
   add_run(kNlosSimVariants[13], nu::run(std::span<const messages::ImuSample>(imu), rs, nu::ImuRangeEkf<>(s, sheet), nu::PaperEpochRule{}, classifier, s));
   score_identification(rep.proposed, lr, rep.svm_vu_model, rep);
   return rep;

@@ -378,7 +378,7 @@ class ForwardPass {
   std::vector<OutageWindow> windows_;
   Decimator decimator_;
   models::StaticDetector detector_;
-  ChiSquareGate gate_;
+  policies::ChiSquareGate gate_;
   Model model_{};
   models::ImuInput imu_;
   models::HeldInput<messages::ImuSample> held_imu_;

@@ -47,7 +47,7 @@ using CalibratedLayout = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>, StateBlo
 /// with 8 and 16). Settings::lag_records sizes the fixed-lag window in records (one per
 /// accepted range, one per epoch's end), allocated once at construction: 0.9 s of 4 anchors at
 /// 10 Hz is 45; `run uwb` sets it from the recording (recording.hpp, lag_records_needed).
-template <GatePolicy Gate = ChiSquareGate, bool Lagged = false, int MaxAnchors = 8>
+template <GatePolicy Gate = policies::ChiSquareGate, bool Lagged = false, int MaxAnchors = 8>
 class CalibratedRangeEkf {
  public:
   static constexpr int N = 4 + MaxAnchors;

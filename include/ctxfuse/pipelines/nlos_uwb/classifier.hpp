@@ -61,13 +61,13 @@ class NlosClassifier {
     features::NlosFeatures f;
     const features::UwbRangeSample sample{r.t, r.range_m, r.rssi_dbm, r.rssi_first_path_dbm};
     const double speed = std::isfinite(speed_mps) ? speed_mps : 0.0;
-    if (x->push(sample, speed, f) != features::NlosFeatureStatus::ok) return v;
+    if (!x->push(sample, speed, f) || !f.has_previous_sample) return v;
     const SvmInput in{f.range_rate_mps, f.vehicle_speed_mps};
     if (input) *input = in;
     v.p2 = consistency_.nlos_probability(f.consistency_error_m);
     if (svm_ && in.finite()) {
       classify::SvmPrediction<2> out;
-      if (classify::svm_predict(*svm_, Eigen::Vector2d(in.vector()), out) == classify::SvmStatus::ok && out.has_probabilities)
+      if (classify::svm_predict(*svm_, Eigen::Vector2d(in.vector()), out).accepted() && out.has_probabilities)
         v.p1 = out.probabilities[svm_->labels[0] == kNlosLabel ? 0 : 1];
     }
     if (std::isnan(v.p1)) {
@@ -75,7 +75,7 @@ class NlosClassifier {
     } else {
       const classify::DsResult ds = classify::combine_probabilities(v.p1, v.p2);
       // Total conflict (one source certain of each side) leaves no belief: no decision.
-      v.R = ds.status == classify::DsStatus::ok ? ds.nlos_belief() : std::nan("");
+      v.R = ds.status.accepted() ? ds.nlos_belief() : std::nan("");
     }
     v.nlos = !std::isnan(v.R) && decision_(v.R);
     return v;

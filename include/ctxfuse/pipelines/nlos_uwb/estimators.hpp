@@ -116,8 +116,8 @@ inline Status initial_belief(const Eigen::Vector2d& p, const Eigen::Matrix2d& P,
 /// The innovation gate of the settings (a chi-square gate at settings.gate_probability).
 template <GatePolicy Gate>
 Gate make_gate(const Settings& s) {
-  if constexpr (std::is_same_v<Gate, ChiSquareGate>)
-    return ChiSquareGate(s.gate_probability);
+  if constexpr (std::is_same_v<Gate, policies::ChiSquareGate>)
+    return policies::ChiSquareGate(s.gate_probability);
   else
     return Gate{};
 }
@@ -166,7 +166,7 @@ class PlanarCvBelief {
 
 }  // namespace detail
 
-template <GatePolicy Gate = ChiSquareGate>
+template <GatePolicy Gate = policies::ChiSquareGate>
 class RangeEkf : public detail::PlanarCvBelief {
  public:
   explicit RangeEkf(const Settings& s) : PlanarCvBelief(s), gate_(make_gate<Gate>(s)) {}

@@ -28,7 +28,7 @@
 
 namespace ctxfuse::pipelines::nlos_uwb {
 
-template <GatePolicy Gate = ChiSquareGate>
+template <GatePolicy Gate = policies::ChiSquareGate>
 class ImuRangeEkf {
  public:
   static constexpr int kIntervalSamples = 32;

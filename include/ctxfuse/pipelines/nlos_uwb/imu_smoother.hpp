@@ -165,7 +165,7 @@ class ImuPieces {
   bool has_last_ = false;
 };
 
-template <int K = 10, GatePolicy Gate = ChiSquareGate, int OutputLag = 0>
+template <int K = 10, GatePolicy Gate = policies::ChiSquareGate, int OutputLag = 0>
 class ImuRangeSmoother {
   static_assert(OutputLag >= 0 && OutputLag < K, "the reported state must be in the window");
 

@@ -16,7 +16,7 @@
 // estimate's standard error with 40 differences is about 0.16 per anchor, less in the mean);
 // anchors with fewer than kMinDifferences differences are left out (a slow anchor has few);
 // none left, or no such lag: not detected (raw).
-// The tag's height: a 3-D fit (filters::multilaterate_3d) of each anchor's median range over the
+// The tag's height: a 3-D fit (multilaterate_3d) of each anchor's median range over the
 // static start, with its vertical dilution of precision; settings_for_recording takes it when
 // the vertical sigma it implies is small enough (choose_tag_height).
 #pragma once
@@ -136,9 +136,9 @@ void fit_tag_height(const std::map<int, std::vector<const messages::UwbRange*>>&
     m.range_m = median(std::move(r));
     medians.push_back(m);
   }
-  filters::MultilaterationOptions o;
+  MultilaterationOptions o;
   o.sigma_m = 1.0;  // the covariance is then the dilution of precision squared
-  const auto fit = filters::multilaterate_3d(medians, o);
+  const auto fit = multilaterate_3d(medians, o);
   if (!fit.ok()) {
     f.tag_height_note = std::string("no 3-D fit of the static start: ") + std::string(describe(fit.status.problem));
     return;

@@ -63,8 +63,8 @@ struct Track {
   std::size_t ranges_attached = 0, ranges_accepted = 0, ranges_gated = 0, ranges_invalid = 0;
 };
 
-inline filters::MultilaterationOptions snapshot_options(const Settings& s) {
-  filters::MultilaterationOptions o;
+inline MultilaterationOptions snapshot_options(const Settings& s) {
+  MultilaterationOptions o;
   o.tag_height_m = s.tag_height_m;
   o.sigma_m = s.range_sigma_m;
   o.max_rms_m = 3.0 * s.range_sigma_m;  // a start from a fix that fits its ranges within 3 sigma
@@ -76,10 +76,10 @@ inline filters::MultilaterationOptions snapshot_options(const Settings& s) {
 /// not ok when no run gives an accepted fix. `max_rms_m` is the residual test (3 sigma for a
 /// start; infinite for the LS baseline, which keeps every solution).
 template <class = void>
-filters::Multilateration best_snapshot_fix(std::span<const messages::UwbRange> epoch, const Settings& s, double max_rms_m) {
-  filters::MultilaterationOptions o = snapshot_options(s);
+Multilateration best_snapshot_fix(std::span<const messages::UwbRange> epoch, const Settings& s, double max_rms_m) {
+  MultilaterationOptions o = snapshot_options(s);
   o.max_rms_m = max_rms_m;
-  filters::Multilateration best = filters::multilaterate(epoch, o);
+  Multilateration best = multilaterate(epoch, o);
   if (epoch.size() < 3) return best;
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();
   for (const auto& r : epoch) centre += r.anchor_position.head<2>();
@@ -89,7 +89,7 @@ filters::Multilateration best_snapshot_fix(std::span<const messages::UwbRange> e
     for (int k = 0; k < 8; ++k) {
       const double a = 0.25 * 3.14159265358979323846 * k;
       o.initial = centre + radius * Eigen::Vector2d(std::cos(a), std::sin(a));
-      const auto fix = filters::multilaterate(epoch, o);
+      const auto fix = multilaterate(epoch, o);
       if (fix.ok() && (!best.ok() || fix.rms_m < best.rms_m)) best = fix;
     }
   return best;
@@ -300,11 +300,11 @@ Track run(std::span<const messages::ImuSample> imu, std::span<const messages::Uw
 template <class = void>
 Track least_squares_track(std::span<const messages::UwbRange> ranges, const Settings& s) {
   Track track;
-  filters::MultilaterationOptions o = snapshot_options(s);
+  MultilaterationOptions o = snapshot_options(s);
   o.max_rms_m = std::numeric_limits<double>::infinity();
   auto process = [&](std::span<const messages::UwbRange> epoch) {
     ++track.epochs;
-    const auto fix = filters::multilaterate(epoch, o);
+    const auto fix = multilaterate(epoch, o);
     if (!fix.ok()) return;
     ++track.epochs_attached;
     track.estimates.push_back({epoch.back().t, fix.position, true});

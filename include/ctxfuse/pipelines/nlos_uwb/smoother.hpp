@@ -93,7 +93,7 @@ const auto& lagged_epoch(const S& smoother, int lag) {
   return w.epochs[static_cast<std::size_t>(std::max(0, w.size - 1 - lag))];
 }
 
-template <int K = 10, GatePolicy Gate = ChiSquareGate, int OutputLag = 0>
+template <int K = 10, GatePolicy Gate = policies::ChiSquareGate, int OutputLag = 0>
 class RangeSmoother {
   static_assert(OutputLag >= 0 && OutputLag < K, "the reported state must be in the window");
 

@@ -51,7 +51,7 @@ struct UwbOnlyT {
   using Cv = models::ConstantVelocity<L, 2>;
   const Settings& s;
   Track track{};
-  std::optional<Ekf<Cv, ChiSquareGate>> f{};
+  std::optional<Ekf<Cv, policies::ChiSquareGate>> f{};
   policies::SourceHealth health{s.health};
   bool locked = false;
   double last_range_t = -1e9;
@@ -66,7 +66,7 @@ struct UwbOnlyT {
     b.mean.setZero();
     L::get<"p">(b.mean) = p0;
     b.cov = SquareMatrix<L::size>::Identity();
-    f.emplace(cv, b, FilterOptions{}, ChiSquareGate(s.gate_probability));
+    f.emplace(cv, b, FilterOptions{}, policies::ChiSquareGate(s.gate_probability));
     now = t0;
     held = p0;
   }
@@ -80,14 +80,14 @@ struct UwbOnlyT {
   // enough: a snapshot tracker has no IMU to carry it through an NLOS stamp, so it follows
   // every snapshot that disagrees.
   policies::SnapshotIntegrity<2> mirror_check{{.probability = 0.999, .min_error_m = 0.0, .consecutive = 1}};
-  bool disagrees(const filters::Multilateration& snap, double t) {
+  bool disagrees(const Multilateration& snap, double t) {
     const auto& b = f->belief();
     return mirror_check.check(t, snap.position, snap.cov, L::get<"p">(b.mean), L::cov<"p">(b.cov)).has_value();
   }
   void uwb(const messages::UwbRange& r) {
     last_range_t = now;
     add_to_stamp(epoch_ranges, r);
-    const auto snap = filters::multilaterate(epoch_ranges, snapshot_options(s));
+    const auto snap = multilaterate(epoch_ranges, snapshot_options(s));
     if (snap.ok() && (!locked || disagrees(snap, r.t))) {
       Gaussian<L::size> b = f->belief();
       L::get<"p">(b.mean) = snap.position;

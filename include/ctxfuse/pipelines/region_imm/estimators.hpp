@@ -59,14 +59,14 @@ template <class = void>
 struct SingleCoreT {
   static constexpr int kTakers = 1;
   static constexpr bool kWhole = false;
-  using Filter = Ekf<models::PlanarImuModel, ChiSquareGate>;
+  using Filter = Ekf<models::PlanarImuModel, policies::ChiSquareGate>;
   const Settings* s;
   bool gnss_taker, uwb_taker;
   double process_factor, meas_factor;
   std::optional<Filter> f{};
 
   void start(double, const Gaussian<L::size>& b0) {
-    f.emplace(process_model(*s, process_factor), b0, FilterOptions{}, ChiSquareGate(s->gate_probability));
+    f.emplace(process_model(*s, process_factor), b0, FilterOptions{}, policies::ChiSquareGate(s->gate_probability));
   }
   Status predict(const models::PlanarImu& u, double dt) { return f->predict(u, dt); }
   bool speed(const messages::SpeedSample& v) {
@@ -106,7 +106,7 @@ template <class = void>
 struct FederatedCoreT {
   static constexpr int kTakers = 1;
   static constexpr bool kWhole = false;
-  using Filter = fkf::FederatedFilter<models::PlanarImuModel, 2, ChiSquareGate>;
+  using Filter = fkf::FederatedFilter<models::PlanarImuModel, 2, policies::ChiSquareGate>;
   const Settings* s;
   bool static_weights = false;
   std::array<double, 2> beta{0.5, 0.5};
@@ -114,7 +114,7 @@ struct FederatedCoreT {
 
   void start(double, const Gaussian<L::size>& b0) {
     process_model_ = process_model(*s, 1.0);
-    f.emplace(process_model_, b0, beta, FilterOptions{}, ChiSquareGate(s->gate_probability));
+    f.emplace(process_model_, b0, beta, FilterOptions{}, policies::ChiSquareGate(s->gate_probability));
   }
   Status predict(const models::PlanarImu& u, double dt) { return f->predict(u, dt); }
   bool speed(const messages::SpeedSample& v) {  // accepted by either local filter
@@ -168,15 +168,15 @@ struct FederatedCoreT {
 };
 using FederatedCore = FederatedCoreT<>;
 
-using OdrMode = imm::Mode<models::PlanarImuModel, imm::Accepts<GnssTag, SpeedTag>, ChiSquareGate>;
-using IotrMode = imm::Mode<models::PlanarImuModel, imm::Accepts<GnssTag, UwbTag, SpeedTag>, ChiSquareGate>;
-using IdrMode = imm::Mode<models::PlanarImuModel, imm::Accepts<UwbTag, SpeedTag>, ChiSquareGate>;
+using OdrMode = imm::Mode<models::PlanarImuModel, imm::Accepts<GnssTag, SpeedTag>, policies::ChiSquareGate>;
+using IotrMode = imm::Mode<models::PlanarImuModel, imm::Accepts<GnssTag, UwbTag, SpeedTag>, policies::ChiSquareGate>;
+using IdrMode = imm::Mode<models::PlanarImuModel, imm::Accepts<UwbTag, SpeedTag>, policies::ChiSquareGate>;
 
 template <class Mixing>
 using RegionImm = imm::Imm<Mixing, OdrMode, IotrMode, IdrMode>;
 
 inline auto make_modes(const Settings& s) {
-  const ChiSquareGate gate(s.gate_probability);
+  const policies::ChiSquareGate gate(s.gate_probability);
   return boost::hana::make_tuple(OdrMode{process_model(s, s.mode_process_noise_factor[0]), gate},
                                  IotrMode{process_model(s, s.mode_process_noise_factor[1]), gate},
                                  IdrMode{process_model(s, s.mode_process_noise_factor[2]), gate});

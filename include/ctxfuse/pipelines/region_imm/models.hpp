@@ -101,7 +101,7 @@ inline void widen(SquareMatrix<L::size>& P, const Settings& s, double reach = 0.
 }
 
 /// Snapshot multilateration of one time stamp's ranges, with the residual test at 3 sigma.
-inline filters::MultilaterationOptions snapshot_options(const Settings& s) {
+inline MultilaterationOptions snapshot_options(const Settings& s) {
   return {.tag_height_m = s.uwb_tag_height, .sigma_m = s.uwb_sigma, .max_rms_m = 3.0 * s.uwb_sigma};
 }
 
@@ -131,7 +131,7 @@ struct UwbIntegrity {
     if (ranges.empty()) return std::nullopt;
     std::optional<Fault> fault;
     if (static_cast<int>(ranges.size()) >= s.integrity_min_anchors) {
-      if (const auto snap = filters::multilaterate(ranges, snapshot_options(s)); snap.ok())
+      if (const auto snap = multilaterate(ranges, snapshot_options(s)); snap.ok())
         fault = monitor.check(ranges.front().t, snap.position, snap.cov, L::get<"p">(b.mean), L::cov<"p">(b.cov));
     }
     ranges.clear();

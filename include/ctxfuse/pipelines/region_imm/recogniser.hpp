@@ -86,16 +86,27 @@ std::vector<int> svm_labels(const classify::SvmModel<2, 3>& model, const Feature
   out.reserve(f.x.size());
   for (const auto& x : f.x) {
     classify::SvmPrediction<3> p;
-    out.push_back(classify::svm_predict(model, x, p) == classify::SvmStatus::ok ? p.label : -1);
+    out.push_back(classify::svm_predict(model, x, p).accepted() ? p.label : -1);
   }
   return out;
+}
+
+/// The HMM's Viterbi path over a drive's features; a non-finite feature throws
+/// std::invalid_argument naming its epoch.
+template <class = void>
+std::vector<int> viterbi_labels(const classify::GaussianHmm<kRegions, 2>& hmm, const FeatureSeries& f) {
+  auto v = classify::viterbi<kRegions, 2>(hmm, std::span<const Feature>(f.x));
+  if (!v.status)
+    throw std::invalid_argument("region recogniser: the features of epoch " + std::to_string(v.refused_at) +
+                                " are not finite");
+  return std::move(v.path);
 }
 
 template <class = void>
 Recognition recognise(const Recogniser& r, const FeatureSeries& f) {
   Recognition out;
   out.svm = svm_labels(r.svm, f);
-  out.hmm = classify::viterbi<kRegions, 2>(r.hmm, std::span<const Feature>(f.x)).path;
+  out.hmm = viterbi_labels(r.hmm, f);
   out.joint.resize(f.x.size());
   for (std::size_t i = 0; i < f.x.size(); ++i) out.joint[i] = r.vote({out.svm[i], out.hmm[i]});
   return out;
@@ -111,7 +122,7 @@ std::vector<Vector<kRegions>> hmm_posteriors(const Recogniser& r, const FeatureS
   classify::HmmForwardFilter<kRegions, 2> filter(r.hmm);
   Vector<kRegions> last = Vector<kRegions>::Constant(1.0 / kRegions);
   for (const auto& x : f.x) {
-    if (filter.step(x) == classify::FilterStatus::ok) last = filter.posterior();
+    if (filter.step(x).accepted()) last = filter.posterior();
     out.push_back(last);
   }
   return out;

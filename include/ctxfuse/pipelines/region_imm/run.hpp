@@ -61,7 +61,7 @@ struct Runner {
   // A UWB stamp is complete once the replay moves past its time; its snapshot may start the
   // estimator there.
   void flush_stamp() {
-    const auto snap = filters::multilaterate(stamp, snapshot_options(s));
+    const auto snap = multilaterate(stamp, snapshot_options(s));
     const double t = stamp.front().t;
     stamp.clear();
     if (!snap.ok()) return;

@@ -56,7 +56,7 @@ Recogniser train_recogniser(std::span<const LabelledFeatures> train, const Label
 
   Recognition v;
   v.svm = svm_labels(r.svm, validate.features);
-  v.hmm = classify::viterbi<kRegions, 2>(r.hmm, std::span<const Feature>(validate.features.x)).path;
+  v.hmm = viterbi_labels(r.hmm, validate.features);
   r.validation_accuracy[0] = classify::per_region_accuracy<kRegions>(validate.labels, v.svm);
   r.validation_accuracy[1] = classify::per_region_accuracy<kRegions>(validate.labels, v.hmm);
   r.vote = classify::WeightedVote<kRegions, 2>::from_accuracies(r.validation_accuracy);

@@ -1,7 +1,5 @@
-// N standard normal draws in index order, for the tests' simulated noise. Not
-// Vector(rng.normal(), rng.normal(), ...): the order in which function arguments are evaluated
-// is unspecified (g++ goes right to left, clang left to right), so the same seed would give
-// each compiler another run. draw_start: a Monte Carlo run's prior and the truth drawn from it.
+// A Monte Carlo run's start: a prior with independent components and the truth drawn from it
+// (the draws in index order by sim::Rng::normals).
 #pragma once
 
 #include <Eigen/Core>
@@ -10,13 +8,6 @@
 #include "ctxfuse/sim/random.hpp"
 
 namespace ctxfuse::test {
-
-template <int N>
-Eigen::Matrix<double, N, 1> standard_normal(sim::Rng& rng) {
-  Eigen::Matrix<double, N, 1> v;
-  for (int i = 0; i < N; ++i) v(i) = rng.normal();
-  return v;
-}
 
 /// A prior with independent components (means, standard deviations) and a truth drawn from it,
 /// so the filter's first error is N(0, P0), as it assumes.
@@ -30,7 +21,7 @@ DrawnStart<N> draw_start(const Eigen::Matrix<double, N, 1>& mean, const Eigen::M
   DrawnStart<N> s;
   s.prior.mean = mean;
   s.prior.cov = sd.cwiseProduct(sd).asDiagonal();
-  s.truth = mean + sd.cwiseProduct(standard_normal<N>(rng));
+  s.truth = mean + sd.cwiseProduct(rng.normals<N>());
   return s;
 }
 
