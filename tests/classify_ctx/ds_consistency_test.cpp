@@ -80,7 +80,7 @@ TEST(ConsistencyModel, PaperStepsAtOneTwoThreeSigma) {
   // Range shrank 0.5 m while the car moved 0.2 m: e = 0.3 -> third bin.
   EXPECT_NEAR(ConsistencyModel::consistency_error(-0.5, 0.2), 0.3, 1e-15);
   EXPECT_EQ(m.nlos_probability(-0.5, 0.2), 0.70);
-  EXPECT_TRUE(m.validate().empty());
+  EXPECT_TRUE(m.check().ok());
 }
 
 TEST(ConsistencyModel, CustomParametersAndValidation) {
@@ -93,13 +93,13 @@ TEST(ConsistencyModel, CustomParametersAndValidation) {
   EXPECT_EQ(m.nlos_probability(0.5), 0.3);
   EXPECT_EQ(m.nlos_probability(0.81), 0.4);
   m.sigma_multiples = {1.0, 1.0, 2.0};
-  EXPECT_FALSE(m.validate().empty());
+  EXPECT_FALSE(m.check().ok());
   m = ConsistencyModel{};
   m.sigma_uwb = 0.0;
-  EXPECT_FALSE(m.validate().empty());
+  EXPECT_FALSE(m.check().ok());
   m = ConsistencyModel{};
   m.probabilities[2] = 1.1;
-  EXPECT_FALSE(m.validate().empty());
+  EXPECT_FALSE(m.check().ok());
 }
 
 TEST(NlosPolicies, DecisionAndAttachRules) {

@@ -95,6 +95,8 @@ TEST(NoExceptions, ClassifiersAndExtractorsReportWithStatuses) {
   features::GnssSceneFeatures g;
   EXPECT_EQ(scene.push({0.0, sats}, g).problem, Problem::duplicate_satellite);
   EXPECT_EQ(features::GnssSceneExtractor<>::check({.window_s = 0.0}), Problem::invalid_setting);
+  EXPECT_EQ(classify::ConsistencyModel{.sigma_uwb = -1.0}.check().problem, Problem::invalid_setting);
+  EXPECT_TRUE(classify::ConsistencyModel{}.check());
 }
 
 TEST(NoExceptionsDeathTest, AConstructorGivenARefusedSettingStopsNamingIt) {

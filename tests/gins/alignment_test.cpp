@@ -10,6 +10,8 @@
 #include <numbers>
 #include <optional>
 #include <random>
+#include <stdexcept>
+#include <string_view>
 #include <vector>
 
 #include "ctxfuse/models/alignment.hpp"
@@ -47,6 +49,20 @@ TEST(DynamicAligner, ReceiverVelocityGivesTheHeadingWithItsCrossTrackSigma) {
   EXPECT_NEAR(std::sqrt(al->heading_var), 0.03 / 2.0, 1e-12);
   EXPECT_EQ(al->velocity, f.v);
   EXPECT_EQ(al->position, f.p);
+}
+
+TEST(DynamicAligner, OptionsOutOfRangeAreNamedAndRefusedAtConstruction) {
+  models::AlignmentOptions o;
+  ASSERT_TRUE(o.check().ok());
+  o.max_span_s = std::nan("");
+  const SettingCheck c = o.check();
+  EXPECT_EQ(c.problem, Problem::invalid_setting);
+  EXPECT_NE(c.what.find("max_span_s"), std::string_view::npos) << c.what;
+  EXPECT_THROW(models::DynamicAligner{o}, std::invalid_argument);
+  o = {};
+  o.heading_sigma_floor = -0.1;
+  EXPECT_NE(o.check().what.find("floors"), std::string_view::npos);
+  EXPECT_THROW(models::DynamicAligner{o}, std::invalid_argument);
 }
 
 TEST(DynamicAligner, AChordAcrossATurnIsNoHeadingTheStraightPartIs) {

@@ -44,7 +44,7 @@ void predict_by_samples(Gaussian<L::size>& b, double t0, double t1, const models
   for (int k = 0; 0.01 * k < t1; ++k) {
     const double a = std::max(t0, 0.01 * k), e = std::min(t1, 0.01 * (k + 1));
     if (e <= a + 1e-12) continue;
-    ASSERT_TRUE(ekf::predict(m, b, pipelines::region_imm::planar_input(sample(k)), e - a).accepted());
+    ASSERT_TRUE(ekf::predict(m, b, models::planar_input(sample(k)), e - a).accepted());
   }
 }
 

@@ -22,7 +22,7 @@ Eigen::Vector2d on_line(double t) {
 
 TEST(RegionAlignment, WaitsUntilTheFixesPinTheHeadingThenUsesTheLongestBaseline) {
   const ri::Settings s;  // 5 m, 10 s, 5 deg, 1 s
-  models::DynamicAligner aligner(ri::alignment_options(s));
+  models::DynamicAligner aligner(s.alignment_options());
   const double sd = 1.0;
   const Eigen::Matrix2d cov = Eigen::Matrix2d::Identity() * sd * sd;
   // Heading sigma of a baseline of length L: sqrt(2) sd / L; 5 deg needs L >= 16.2 m, so the
@@ -45,7 +45,7 @@ TEST(RegionAlignment, WaitsUntilTheFixesPinTheHeadingThenUsesTheLongestBaseline)
 
 TEST(RegionAlignment, PreciseFixesAlignAtTheMinimumDistance) {
   ri::Settings s;
-  models::DynamicAligner aligner(ri::alignment_options(s));
+  models::DynamicAligner aligner(s.alignment_options());
   const Eigen::Matrix2d cov = Eigen::Matrix2d::Identity() * 1e-4;  // 1 cm
   EXPECT_FALSE(aligner.add(0.0, Eigen::Vector2d(0, 0), cov).has_value());
   EXPECT_FALSE(aligner.add(0.5, Eigen::Vector2d(0, 4.9), cov).has_value());  // not yet 5 m
@@ -61,7 +61,7 @@ TEST(RegionAlignment, PreciseFixesAlignAtTheMinimumDistance) {
 TEST(RegionAlignment, FixesOlderThanTheSpanAndBadFixesDoNotCount) {
   ri::Settings s;
   s.align_max_span_s = 2.0;
-  models::DynamicAligner aligner(ri::alignment_options(s));
+  models::DynamicAligner aligner(s.alignment_options());
   const Eigen::Matrix2d cov = Eigen::Matrix2d::Identity() * 1e-4;
   EXPECT_FALSE(aligner.add(0.0, Eigen::Vector2d(0, 0), cov).has_value());
   // 10 m away but 3 s later: outside the span.
@@ -86,7 +86,7 @@ TEST(RegionAlignment, InitialBeliefCarriesTheAlignmentAndTheBiasPriors) {
   a.velocity_cov << 2, 0.5, 0.5, 3;
   a.heading = 1.1;
   a.heading_var = 0.01;
-  const auto b = ri::initial_belief(a, s);
+  const auto b = models::planar_initial_belief(a, s);
   using L = ri::L;
   EXPECT_EQ(L::get<"p">(b.mean), a.position);
   EXPECT_EQ(L::get<"v">(b.mean), a.velocity);

@@ -182,7 +182,7 @@ TEST(RegionPipeline, TheRecognisedMatrixCountsEachTransitionOnceFromTheStart) {
   ri::Alignment a;
   a.position = Eigen::Vector2d(5.0, -2.0);
   a.velocity = Eigen::Vector2d(1.0, 0.0);
-  const auto b0 = ri::initial_belief(a, s);
+  const auto b0 = models::planar_initial_belief(a, s);
   imm.start(0.0, b0);
   imm.epoch(0.0);
   EXPECT_EQ(imm.core().f->mixing().counts(), Eigen::Matrix3d::Zero()) << "a transition counted at the start";
@@ -207,7 +207,7 @@ TEST(RegionPipeline, StaticWeightFederatedFilterCombinesTheLocalsWithFixedWeight
   a.position = Eigen::Vector2d(5.0, -2.0);
   a.velocity = Eigen::Vector2d(2.0, 1.0);
   a.heading = 0.4;
-  const auto b0 = ri::initial_belief(a, s);
+  const auto b0 = models::planar_initial_belief(a, s);
   ri::FederatedCore fixed{&s, true}, informed{&s, false};
   messages::GnssFix fix;
   fix.t = 1.0;

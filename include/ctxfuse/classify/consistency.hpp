@@ -11,6 +11,8 @@
 #include <cmath>
 #include <string>
 
+#include "ctxfuse/core/error.hpp"
+
 namespace ctxfuse::classify {
 
 struct ConsistencyModel {
@@ -19,16 +21,16 @@ struct ConsistencyModel {
   /// NLOS probability for e <= t1, t1 < e <= t2, t2 < e <= t3, e > t3 (t = multiple * sigma).
   std::array<double, 4> probabilities{0.35, 0.55, 0.70, 0.90};
 
-  /// Empty when usable, otherwise what is wrong with the parameters.
-  std::string validate() const {
-    if (!(sigma_uwb > 0.0) || !std::isfinite(sigma_uwb)) return "sigma_uwb must be finite and > 0";
+  /// Usable, or which parameter is out of range.
+  SettingCheck check() const {
+    if (!(sigma_uwb > 0.0) || !std::isfinite(sigma_uwb)) return SettingCheck::refuse("sigma_uwb must be finite and > 0");
     for (int i = 0; i < 3; ++i) {
-      if (!std::isfinite(sigma_multiples[i])) return "sigma_multiples must be finite";
+      if (!std::isfinite(sigma_multiples[i])) return SettingCheck::refuse("sigma_multiples must be finite");
       if (i > 0 && !(sigma_multiples[i] > sigma_multiples[i - 1]))
-        return "sigma_multiples must be strictly increasing";
+        return SettingCheck::refuse("sigma_multiples must be strictly increasing");
     }
     for (double p : probabilities)
-      if (!(p >= 0.0 && p <= 1.0)) return "probabilities must lie in [0, 1]";
+      if (!(p >= 0.0 && p <= 1.0)) return SettingCheck::refuse("probabilities must lie in [0, 1]");
     return {};
   }
 

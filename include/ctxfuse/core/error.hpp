@@ -4,17 +4,36 @@
 // naming the setting. Compiled with -fno-exceptions, it prints that message to stderr and
 // aborts. Code that must not stop checks first: each such constructor has a check function
 // beside it that returns Problem::invalid_setting (or a more specific Problem) instead, and a
-// constructor given settings its check accepted does not fail. Steps (predict, update, mix...)
-// never throw and never abort: they return a Status.
+// constructor given settings its check accepted does not fail. A settings struct's check()
+// returns a SettingCheck: the Problem and, in words, which setting is out of range. Steps
+// (predict, update, mix...) never throw and never abort: they return a Status.
 #pragma once
 
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <string_view>
+
+#include "ctxfuse/core/status.hpp"
 
 #if defined(__cpp_exceptions) || defined(__EXCEPTIONS)
 #include <stdexcept>
 #endif
+
+namespace ctxfuse {
+
+/// A settings struct's verdict on itself: usable, or the Problem (Problem::invalid_setting) and
+/// the setting that is out of range, in words (static text: no allocation, no exception).
+struct SettingCheck {
+  Problem problem = Problem::none;
+  std::string_view what{};
+
+  constexpr bool ok() const { return problem == Problem::none; }
+  constexpr explicit operator bool() const { return ok(); }
+  static constexpr SettingCheck refuse(std::string_view what) { return {Problem::invalid_setting, what}; }
+};
+
+}  // namespace ctxfuse
 
 namespace ctxfuse::detail {
 

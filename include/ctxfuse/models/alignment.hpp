@@ -30,6 +30,8 @@
 #include <optional>
 #include <string>
 
+#include "ctxfuse/core/error.hpp"
+
 namespace ctxfuse::models {
 
 struct AlignmentOptions {
@@ -43,15 +45,15 @@ struct AlignmentOptions {
   double velocity_sigma_floor_mps = 0.0;
   double heading_sigma_floor = 0.0;  // [rad]
 
-  /// Empty when usable, else the problem.
-  std::string validate() const {
+  /// Usable, or which option is out of range (DynamicAligner's constructor refuses it).
+  SettingCheck check() const {
     auto nonneg = [](double v) { return std::isfinite(v) && v >= 0.0; };
-    if (!(std::isfinite(max_span_s) && max_span_s > 0.0)) return "alignment max_span_s must be finite and > 0";
-    if (!nonneg(min_distance_m)) return "alignment min_distance_m must be finite and >= 0";
-    if (!(std::isfinite(max_heading_sigma) && max_heading_sigma > 0.0)) return "alignment max_heading_sigma must be finite and > 0";
-    if (!nonneg(velocity_baseline_s)) return "alignment velocity_baseline_s must be finite and >= 0";
+    if (!(std::isfinite(max_span_s) && max_span_s > 0.0)) return SettingCheck::refuse("alignment max_span_s must be finite and > 0");
+    if (!nonneg(min_distance_m)) return SettingCheck::refuse("alignment min_distance_m must be finite and >= 0");
+    if (!(std::isfinite(max_heading_sigma) && max_heading_sigma > 0.0)) return SettingCheck::refuse("alignment max_heading_sigma must be finite and > 0");
+    if (!nonneg(velocity_baseline_s)) return SettingCheck::refuse("alignment velocity_baseline_s must be finite and >= 0");
     if (!nonneg(position_sigma_floor_m) || !nonneg(velocity_sigma_floor_mps) || !nonneg(heading_sigma_floor))
-      return "alignment floors must be finite and >= 0";
+      return SettingCheck::refuse("alignment floors must be finite and >= 0");
     return {};
   }
 };
@@ -88,7 +90,10 @@ class DynamicAligner {
   static constexpr std::size_t kCapacity = 128;
 
   DynamicAligner() = default;
-  explicit DynamicAligner(const AlignmentOptions& o) : o_(o) {}
+  /// Options that o.check() refuses are a setting error (core/error.hpp).
+  explicit DynamicAligner(const AlignmentOptions& o) : o_(o) {
+    if (const SettingCheck c = o.check(); !c) ctxfuse::detail::invalid_setting("DynamicAligner: " + std::string(c.what));
+  }
 
   /// Forgets every fix offered (a restart aligns afresh).
   void reset() { first_ = count_ = 0; }

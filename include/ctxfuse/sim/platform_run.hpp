@@ -26,6 +26,7 @@
 #include <utility>
 #include <vector>
 
+#include "ctxfuse/core/error.hpp"
 #include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/models/earth.hpp"
 #include "ctxfuse/sim/random.hpp"
@@ -57,15 +58,15 @@ struct PlatformRunConfig {
   Eigen::Vector3d origin_llh_deg = Eigen::Vector3d(37.4, -122.1, 30.0);
   double gps_start_s = 1780315200.0;  // 2026-06-01 12:00:00 on RTKLIB's 1970-based GPST scale
 
-  std::string validate() const {
+  SettingCheck check() const {
     auto pos = [](double v) { return std::isfinite(v) && v > 0.0; };
-    if (!(std::isfinite(rest_s) && rest_s >= 0.0)) return "rest_s must be finite and >= 0";
-    if (!pos(duration_s) || duration_s <= rest_s) return "duration_s must exceed rest_s";
-    if (!pos(step_min_s) || !(step_max_s >= step_min_s)) return "IMU steps need 0 < step_min_s <= step_max_s";
-    if (!(std::abs(rate_error_ppm) < 1000.0)) return "rate_error_ppm must be within +-1000";
-    if (!pos(gnss_rate_hz) || gnss_rate_hz > 100.0) return "gnss_rate_hz must be in (0, 100]";
-    if (!(float_share >= 0.0 && float_share < 1.0)) return "float_share must be in [0, 1)";
-    if (!pos(float_stretch_s) || !pos(float_tau_s)) return "float stretches need positive lengths";
+    if (!(std::isfinite(rest_s) && rest_s >= 0.0)) return SettingCheck::refuse("rest_s must be finite and >= 0");
+    if (!pos(duration_s) || duration_s <= rest_s) return SettingCheck::refuse("duration_s must exceed rest_s");
+    if (!pos(step_min_s) || !(step_max_s >= step_min_s)) return SettingCheck::refuse("IMU steps need 0 < step_min_s <= step_max_s");
+    if (!(std::abs(rate_error_ppm) < 1000.0)) return SettingCheck::refuse("rate_error_ppm must be within +-1000");
+    if (!pos(gnss_rate_hz) || gnss_rate_hz > 100.0) return SettingCheck::refuse("gnss_rate_hz must be in (0, 100]");
+    if (!(float_share >= 0.0 && float_share < 1.0)) return SettingCheck::refuse("float_share must be in [0, 1)");
+    if (!pos(float_stretch_s) || !pos(float_tau_s)) return SettingCheck::refuse("float stretches need positive lengths");
     return {};
   }
 };
@@ -162,7 +163,7 @@ struct HeldDevice {
 
 /// Simulates the run. Throws std::invalid_argument for a configuration outside its range.
 inline PlatformRun simulate_platform_run(const PlatformRunConfig& c) {
-  if (const std::string problem = c.validate(); !problem.empty()) throw std::invalid_argument("sim platform run: " + problem);
+  if (const SettingCheck check = c.check(); !check) throw std::invalid_argument("sim platform run: " + std::string(check.what));
   const Route route = detail::platform_route(c.kind, c.rest_s, c.duration_s);
   PlatformRun run;
   run.config = c;

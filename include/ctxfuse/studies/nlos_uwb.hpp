@@ -244,7 +244,7 @@ std::vector<NlosUwbVariant> run_nlos_uwb_variants(std::span<const messages::UwbR
                                                   const pipelines::nlos_uwb::NlosClassifier& classifier,
                                                   const pipelines::nlos_uwb::Settings& s,
                                                   std::span<const std::string_view> names = {}) {
-  if (const std::string problem = s.validate(); !problem.empty()) throw std::invalid_argument("settings: " + problem);
+  if (const SettingCheck c = s.check(); !c) throw std::invalid_argument("settings: " + std::string(c.what));
   std::vector<NlosUwbVariant> out;
   auto add = [&](std::size_t i) { out.push_back({std::string(kNlosUwbVariants[i]), run_nlos_uwb_variant(i, rs, classifier, s), {}}); };
   if (names.empty())
@@ -273,7 +273,7 @@ NlosUwbCaseReport evaluate_nlos_uwb_case(const std::filesystem::path& case_dir,
                                          const pipelines::nlos_uwb::Settings& s, const HanyangSpan& span) {
   namespace nu = pipelines::nlos_uwb;
   namespace fs = std::filesystem;
-  if (const std::string problem = s.validate(); !problem.empty()) throw std::invalid_argument("settings: " + problem);
+  if (const SettingCheck c = s.check(); !c) throw std::invalid_argument("settings: " + std::string(c.what));
   NlosUwbCaseReport rep;
   for (const auto& c : training_cases)
     if (fs::weakly_canonical(c) == fs::weakly_canonical(case_dir))

@@ -231,7 +231,7 @@ template <class = void>
 NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::uint64_t seed, const NlosSimProtocol& protocol,
                                     const pipelines::nlos_uwb::Settings& s) {
   namespace nu = pipelines::nlos_uwb;
-  if (const std::string problem = s.validate(); !problem.empty()) throw std::invalid_argument("settings: " + problem);
+  if (const SettingCheck c = s.check(); !c) throw std::invalid_argument("settings: " + std::string(c.what));
   NlosSimReport rep;
   rep.seed = seed;
   nu::LabelledSvmRows rows;

@@ -21,10 +21,9 @@
 #include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/models/planar.hpp"
 #include "ctxfuse/models/planar_interval.hpp"
+#include "ctxfuse/models/planar_start.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/estimators.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/imu_smoother.hpp"
-#include "ctxfuse/pipelines/region_imm/alignment.hpp"
-#include "ctxfuse/pipelines/region_imm/models.hpp"
 
 namespace ctxfuse::pipelines::nlos_uwb {
 
@@ -37,7 +36,7 @@ class ImuRangeEkf {
 
   ImuRangeEkf(const Settings& s, const ImuFusionSettings& imu)
       : settings_(s), motion_{imu.model()}, gate_(make_gate<Gate>(s)),
-        align_settings_(imu.alignment(s)), aligner_(region_imm::alignment_options(align_settings_)) {}
+        align_settings_(imu.start(s)), aligner_(align_settings_.alignment_options()) {}
 
   bool started() const { return started_; }
   double time() const { return t_; }
@@ -52,7 +51,7 @@ class ImuRangeEkf {
 
   /// One piece of the IMU stream: sample `s` in force over [t, t + span).
   void add_imu(double t, double span, const messages::ImuSample& s) {
-    pieces_.add(t, span, region_imm::planar_input(s), motion_.step);
+    pieces_.add(t, span, models::planar_input(s), motion_.step);
   }
 
   /// Offers the fix to the aligner; starts (accepted) at the fix that completes an alignment,
@@ -62,7 +61,7 @@ class ImuRangeEkf {
     if (!p.allFinite() || !P.allFinite()) return Status::invalid(Problem::non_finite_measurement);
     const auto al = aligner_.add(t, p, P);
     if (!al) return Status::invalid(Problem::time_not_set);
-    belief_ = region_imm::initial_belief(*al, align_settings_);
+    belief_ = models::planar_initial_belief(*al, align_settings_);
     t_ = al->t;
     started_ = true;
     pieces_.drop_before(t_);
@@ -97,7 +96,7 @@ class ImuRangeEkf {
   Settings settings_;
   Motion motion_;
   Gate gate_;
-  region_imm::Settings align_settings_;  // what the aligner and the initial belief read
+  models::PlanarStartSettings align_settings_;  // what the aligner and the initial belief read
   models::DynamicAligner aligner_;
   ImuPieces pieces_;
   typename Motion::Input u_;  // the interval of the latest prediction (kept: no allocation, no large stack copy)

@@ -31,10 +31,9 @@
 #include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/models/planar.hpp"
 #include "ctxfuse/models/planar_interval.hpp"
+#include "ctxfuse/models/planar_start.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/estimators.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/smoother.hpp"
-#include "ctxfuse/pipelines/region_imm/alignment.hpp"
-#include "ctxfuse/pipelines/region_imm/models.hpp"
 
 namespace ctxfuse::pipelines::nlos_uwb {
 
@@ -49,7 +48,7 @@ struct ImuFusionSettings {
   double accel_bias_sigma = 0.02;       // [m/s^2] turn-on bias, 1 sigma
   double gyro_bias_sigma = 8.7e-5;      // [rad/s]
   double bias_tau_s = 300.0;            // Gauss-Markov correlation time of both biases
-  // Alignment (models::DynamicAligner with the region pipeline's options): the heading of two
+  // Alignment (models::DynamicAligner, models/planar_start.hpp): the heading of two
   // snapshot fixes at least align_min_distance_m apart within align_max_span_s, once the
   // fixes' covariances put its 1-sigma below align_max_heading_sigma_deg; the velocity over
   // >= align_velocity_baseline_s.
@@ -69,9 +68,9 @@ struct ImuFusionSettings {
     m.gyro_bias_walk = gyro_bias_sigma * std::sqrt(2.0 / bias_tau_s);
     return m;
   }
-  /// The region pipeline's settings that its aligner and initial belief read.
-  region_imm::Settings alignment(const Settings& s) const {
-    region_imm::Settings a;
+  /// The start's settings (models/planar_start.hpp): the aligner's and the initial belief's.
+  models::PlanarStartSettings start(const Settings& s) const {
+    models::PlanarStartSettings a;
     a.align_min_distance_m = align_min_distance_m;
     a.align_max_span_s = align_max_span_s;
     a.align_max_heading_sigma_deg = align_max_heading_sigma_deg;
@@ -178,7 +177,7 @@ class ImuRangeSmoother {
 
   ImuRangeSmoother(const Settings& s, const ImuFusionSettings& imu)
       : settings_(s), smoother_(Motion{imu.model()}), gate_(make_gate<Gate>(s)),
-        align_settings_(imu.alignment(s)), aligner_(region_imm::alignment_options(align_settings_)) {}
+        align_settings_(imu.start(s)), aligner_(align_settings_.alignment_options()) {}
 
   bool started() const { return started_; }
   double time() const { return smoother_.time(); }
@@ -194,7 +193,7 @@ class ImuRangeSmoother {
 
   /// One piece of the IMU stream: sample `s` in force over [t, t + span).
   void add_imu(double t, double span, const messages::ImuSample& s) {
-    pieces_.add(t, span, region_imm::planar_input(s), smoother_.motion().step);
+    pieces_.add(t, span, models::planar_input(s), smoother_.motion().step);
   }
 
   /// Offers the fix to the aligner; starts (accepted) at the fix that completes an alignment,
@@ -204,7 +203,7 @@ class ImuRangeSmoother {
     if (!p.allFinite() || !P.allFinite()) return Status::invalid(Problem::non_finite_measurement);
     const auto al = aligner_.add(t, p, P);
     if (!al) return Status::invalid(Problem::time_not_set);
-    const Status s = smoother_.initialise(al->t, region_imm::initial_belief(*al, align_settings_));
+    const Status s = smoother_.initialise(al->t, models::planar_initial_belief(*al, align_settings_));
     started_ = s.accepted();
     fresh_ = started_;
     if (started_) pieces_.drop_before(al->t);
@@ -237,7 +236,7 @@ class ImuRangeSmoother {
   Settings settings_;
   Smoother smoother_;
   Gate gate_;
-  region_imm::Settings align_settings_;  // what the aligner and the initial belief read
+  models::PlanarStartSettings align_settings_;  // what the aligner and the initial belief read
   models::DynamicAligner aligner_;
   ImuPieces pieces_;
   bool started_ = false;

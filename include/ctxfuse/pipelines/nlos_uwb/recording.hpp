@@ -295,7 +295,7 @@ inline Settings settings_for_recording(const RecordingFacts& facts, Settings bas
   base.lag_records = lag_window_records(facts, base);
   const std::string source = choose_tag_height(facts, base, tag_height_option_m);
   if (tag_height_source) *tag_height_source = source;
-  if (const std::string p = base.validate(); !p.empty()) problem = "settings: " + p;
+  if (const SettingCheck c = base.check(); !c) problem = "settings: " + std::string(c.what);
   return base;
 }
 

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "ctxfuse/classify/consistency.hpp"
+#include "ctxfuse/core/error.hpp"
 #include "ctxfuse/policies/health.hpp"
 
 namespace ctxfuse::pipelines::nlos_uwb {
@@ -107,28 +108,28 @@ struct Settings {
   int svm_cv_folds = 5;
   int svm_rows_per_class = 1500;
 
-  std::string validate() const {
+  SettingCheck check() const {
     auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
-    if (!positive(range_sigma_m)) return "range_sigma_m must be finite and > 0";
-    if (!positive(max_range_m)) return "max_range_m must be finite and > 0";
-    if (!std::isfinite(tag_height_m)) return "tag_height_m must be finite";
-    if (!positive(epoch_window_s)) return "epoch_window_s must be finite and > 0";
-    if (!(std::isfinite(anchor_bias_sigma_m) && anchor_bias_sigma_m >= 0.0)) return "anchor_bias_sigma_m must be finite and >= 0";
-    if (range_average_samples < 1 || range_average_samples > 100) return "range_average_samples must be in 1..100";
-    if (!positive(range_period_s)) return "range_period_s must be finite and > 0";
-    if (!(std::isfinite(smoothed_output_lag_s) && smoothed_output_lag_s >= 0.0)) return "smoothed_output_lag_s must be finite and >= 0";
-    if (lag_records < 2 || lag_records > 1'000'000) return "lag_records must be in 2..1000000";
-    if (!positive(accel_psd)) return "accel_psd must be finite and > 0";
-    if (!positive(initial_speed_sigma_mps)) return "initial_speed_sigma_mps must be finite and > 0";
-    if (!positive(max_speed_mps)) return "max_speed_mps must be finite and > 0";
-    if (!(gate_probability > 0.0 && gate_probability < 1.0)) return "gate_probability must lie in (0, 1)";
-    if (!(nlos_belief_threshold > 0.0 && nlos_belief_threshold < 1.0)) return "nlos_belief_threshold must lie in (0, 1)";
-    if (!(mixed_epoch_belief > 0.0 && mixed_epoch_belief < 1.0)) return "mixed_epoch_belief must lie in (0, 1)";
-    if (!positive(label_sigma_multiple)) return "label_sigma_multiple must be finite and > 0";
-    if (!positive(lockout.timeout_s) || lockout.min_rejections < 1) return "lockout needs timeout_s > 0 and min_rejections >= 1";
-    if (svm_rows_per_class < 10) return "svm_rows_per_class must be >= 10";
-    if (svm_cv_folds < 2 || svm_cv_folds > 10) return "svm_cv_folds must be in 2..10";
-    return consistency().validate();
+    if (!positive(range_sigma_m)) return SettingCheck::refuse("range_sigma_m must be finite and > 0");
+    if (!positive(max_range_m)) return SettingCheck::refuse("max_range_m must be finite and > 0");
+    if (!std::isfinite(tag_height_m)) return SettingCheck::refuse("tag_height_m must be finite");
+    if (!positive(epoch_window_s)) return SettingCheck::refuse("epoch_window_s must be finite and > 0");
+    if (!(std::isfinite(anchor_bias_sigma_m) && anchor_bias_sigma_m >= 0.0)) return SettingCheck::refuse("anchor_bias_sigma_m must be finite and >= 0");
+    if (range_average_samples < 1 || range_average_samples > 100) return SettingCheck::refuse("range_average_samples must be in 1..100");
+    if (!positive(range_period_s)) return SettingCheck::refuse("range_period_s must be finite and > 0");
+    if (!(std::isfinite(smoothed_output_lag_s) && smoothed_output_lag_s >= 0.0)) return SettingCheck::refuse("smoothed_output_lag_s must be finite and >= 0");
+    if (lag_records < 2 || lag_records > 1'000'000) return SettingCheck::refuse("lag_records must be in 2..1000000");
+    if (!positive(accel_psd)) return SettingCheck::refuse("accel_psd must be finite and > 0");
+    if (!positive(initial_speed_sigma_mps)) return SettingCheck::refuse("initial_speed_sigma_mps must be finite and > 0");
+    if (!positive(max_speed_mps)) return SettingCheck::refuse("max_speed_mps must be finite and > 0");
+    if (!(gate_probability > 0.0 && gate_probability < 1.0)) return SettingCheck::refuse("gate_probability must lie in (0, 1)");
+    if (!(nlos_belief_threshold > 0.0 && nlos_belief_threshold < 1.0)) return SettingCheck::refuse("nlos_belief_threshold must lie in (0, 1)");
+    if (!(mixed_epoch_belief > 0.0 && mixed_epoch_belief < 1.0)) return SettingCheck::refuse("mixed_epoch_belief must lie in (0, 1)");
+    if (!positive(label_sigma_multiple)) return SettingCheck::refuse("label_sigma_multiple must be finite and > 0");
+    if (!positive(lockout.timeout_s) || lockout.min_rejections < 1) return SettingCheck::refuse("lockout needs timeout_s > 0 and min_rejections >= 1");
+    if (svm_rows_per_class < 10) return SettingCheck::refuse("svm_rows_per_class must be >= 10");
+    if (svm_cv_folds < 2 || svm_cv_folds > 10) return SettingCheck::refuse("svm_cv_folds must be in 2..10");
+    return consistency().check();
   }
 };
 

@@ -30,15 +30,6 @@ inline models::PlanarImuModel process_model(const Settings& s, double factor) {
   return m;
 }
 
-/// The planar model's input from an IMU sample (rates, vehicle axes: yaw rate about z, specific
-/// force along x and y).
-inline models::PlanarImu planar_input(const messages::ImuSample& s) {
-  models::PlanarImu u;
-  u.yaw_rate = s.gyro.z();
-  u.accel = s.accel.head<2>();
-  return u;
-}
-
 /// R from the receiver's reported horizontal sigma, floored (receivers under-report in multipath).
 inline models::PlanarPosition gnss_meas(const messages::GnssFix& e, const Settings& s, double factor = 1.0) {
   models::PlanarPosition m;

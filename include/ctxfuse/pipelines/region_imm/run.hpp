@@ -43,8 +43,8 @@ struct Runner {
   Est& est;
   const Settings& s;
   const std::optional<KnownMotion>& known;
-  models::DynamicAligner gnss_aligner{alignment_options(s)};
-  models::DynamicAligner uwb_aligner{alignment_options(s)};
+  models::DynamicAligner gnss_aligner{s.alignment_options()};
+  models::DynamicAligner uwb_aligner{s.alignment_options()};
   std::vector<messages::UwbRange> stamp{};  // before the start: the ranges of the latest stamp
   bool started = false;
   std::optional<Alignment> alignment{};
@@ -56,7 +56,7 @@ struct Runner {
   }
   void begin(const Alignment& a) {
     alignment = a;
-    begin(a.t, initial_belief(a, s));
+    begin(a.t, models::planar_initial_belief(a, s));
   }
   // A UWB stamp is complete once the replay moves past its time; its snapshot may start the
   // estimator there.
@@ -70,7 +70,7 @@ struct Runner {
 
   void propagate(const messages::ImuSample& u, double dt) {
     if (!started && !stamp.empty()) flush_stamp();
-    if (started) est.predict(planar_input(u), dt);
+    if (started) est.predict(models::planar_input(u), dt);
   }
   void on(const messages::SpeedSample& v) {
     if (started) est.speed(v);
@@ -93,7 +93,7 @@ struct Runner {
       return;
     }
     if (known) {
-      begin(fix.t, initial_belief(Eigen::Vector2d(fix.position.head<2>()), *known, s));
+      begin(fix.t, models::planar_initial_belief(Eigen::Vector2d(fix.position.head<2>()), *known, s));
     } else if (const auto a = gnss_aligner.add(fix.t, fix.position.head<2>(), fix.cov.topLeftCorner<2, 2>())) {
       begin(*a);
     }

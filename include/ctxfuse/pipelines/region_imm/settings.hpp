@@ -8,6 +8,7 @@
 
 #include "ctxfuse/core/types.hpp"
 #include "ctxfuse/models/planar.hpp"
+#include "ctxfuse/models/planar_start.hpp"
 #include "ctxfuse/policies/health.hpp"
 #include "ctxfuse/policies/integrity.hpp"
 
@@ -18,7 +19,8 @@ inline constexpr int kRegions = 3;  // 0 outdoor, 1 transition, 2 indoor
 using L = models::PlanarLayout;
 using X = Vector<L::size>;
 
-struct Settings {
+/// The start (alignment from fixes, initial sigmas) is the base's: models/planar_start.hpp.
+struct Settings : models::PlanarStartSettings {
   // Process noise (same model for every filter; per sub-model multipliers below).
   double accel_noise_density = 0.05;  // [m/s^2/sqrt(Hz)] covers the IMU's bias/scale errors left unmodelled
   double gyro_noise_density = 5e-4;   // [rad/s/sqrt(Hz)]
@@ -66,20 +68,6 @@ struct Settings {
   double reanchor_velocity_sigma = 1.0;  // [m/s]
   double reanchor_heading_sigma = 0.3;   // [rad]
   double reanchor_min_speed = 1.0;       // [m/s] below it the heading is kept
-  // Start (alignment.hpp). Dynamic alignment from position fixes (GNSS fixes, or UWB snapshots
-  // where no GNSS reaches): the heading is the direction between two fixes more than
-  // `align_min_distance_m` apart within `align_max_span_s`, taken once the fixes' own reported
-  // noise puts its 1-sigma below `align_max_heading_sigma_deg` (with a 1.5 m receiver sigma,
-  // about 25 m of straight travel); the velocity is the displacement over the last
-  // `align_velocity_baseline_s` or more. Uncertainties follow from the fixes' covariances.
-  double align_min_distance_m = 5.0;
-  double align_max_span_s = 10.0;
-  double align_max_heading_sigma_deg = 5.0;
-  double align_velocity_baseline_s = 1.0;
-  // Initial uncertainty of what the alignment does not observe, and the floors of what it does
-  // (the vehicle may have turned or changed speed between the fixes).
-  double init_position_sigma = 3.0, init_velocity_sigma = 0.2, init_heading_sigma_deg = 2.0;
-  double init_gyro_bias_sigma = 1e-3, init_accel_bias_sigma = 0.05;
   // IMM.
   double stay_probability = 0.9;      // fixed prior: diagonal, per 1 s cycle
   double prior_weight = 0.5;          // w_p; w_m = 1 - w_p
