@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 #include <vector>
 
 namespace {
@@ -129,6 +130,23 @@ TEST(GnssScene, BatchMatchesStreamingAndNamesTheBadEpoch) {
   EXPECT_EQ(refused.status.problem, Problem::out_of_order_time);
   EXPECT_EQ(refused.refused_at, 1u);
   EXPECT_TRUE(refused.features.empty());
+}
+
+TEST(GnssScene, WindowsOutOfRangeAreNamedAndRefusedAtConstruction) {
+  GnssSceneConfig c;
+  ASSERT_TRUE(c.check().ok());
+  c.cn0_window_s = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(c.check().problem, Problem::invalid_setting);
+  EXPECT_EQ(c.check().what, "cn0_window_s must be finite and > 0");
+  try {
+    GnssSceneExtractor<> ex(c);
+    FAIL() << "expected the constructor to refuse";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "GnssSceneExtractor: cn0_window_s must be finite and > 0");
+  }
+  c = {};
+  c.window_s = 0.0;
+  EXPECT_EQ(c.check().what, "window_s must be finite and > 0");
 }
 
 TEST(GnssScene, WindowDropsEpochsOlderThanFourSeconds) {

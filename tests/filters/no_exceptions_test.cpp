@@ -94,7 +94,8 @@ TEST(NoExceptions, ClassifiersAndExtractorsReportWithStatuses) {
   features::GnssSceneExtractor<> scene;
   features::GnssSceneFeatures g;
   EXPECT_EQ(scene.push({0.0, sats}, g).problem, Problem::duplicate_satellite);
-  EXPECT_EQ(features::GnssSceneExtractor<>::check({.window_s = 0.0}), Problem::invalid_setting);
+  EXPECT_EQ(features::GnssSceneConfig{.window_s = 0.0}.check().problem, Problem::invalid_setting);
+  EXPECT_TRUE(features::GnssSceneConfig{}.check());
   EXPECT_EQ(classify::ConsistencyModel{.sigma_uwb = -1.0}.check().problem, Problem::invalid_setting);
   EXPECT_TRUE(classify::ConsistencyModel{}.check());
 }

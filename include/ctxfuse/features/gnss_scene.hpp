@@ -83,6 +83,14 @@ struct GnssSceneConfig {
   double fill_value = -1.0;
   /// Above this PDOP the geometry is called degenerate and PDOP is filled.
   double max_pdop = 100.0;
+
+  /// Usable, or which window is out of range (GnssSceneExtractor's constructor refuses it).
+  SettingCheck check() const {
+    if (!(window_s > 0.0 && std::isfinite(window_s))) return SettingCheck::refuse("window_s must be finite and > 0");
+    if (!(cn0_window_s > 0.0 && std::isfinite(cn0_window_s)))
+      return SettingCheck::refuse("cn0_window_s must be finite and > 0");
+    return {};
+  }
 };
 
 /// True when the satellite's elevation and azimuth are both known.
@@ -134,14 +142,8 @@ class GnssSceneExtractor {
   static_assert(MaxSatellites >= 1 && WindowCapacity >= 2);
 
  public:
-  /// Problem::invalid_setting unless both windows are finite and > 0 (the constructor's check).
-  static Problem check(const GnssSceneConfig& c) {
-    const auto positive = [](double w) { return w > 0.0 && std::isfinite(w); };
-    return positive(c.window_s) && positive(c.cn0_window_s) ? Problem::none : Problem::invalid_setting;
-  }
   explicit GnssSceneExtractor(GnssSceneConfig config = {}) : config_(config) {
-    if (check(config_) != Problem::none)
-      ctxfuse::detail::invalid_setting("GnssSceneExtractor: window_s and cn0_window_s must be finite and > 0");
+    if (const SettingCheck c = config_.check(); !c) ctxfuse::detail::invalid_setting("GnssSceneExtractor: " + std::string(c.what));
   }
 
   void reset() {
