@@ -1,6 +1,8 @@
 // Model files: our format round-trips bit-exactly; a hand-written libsvm file gives the decision
-// values of its closed form; malformed files raise SvmFileError naming file, line and field; no
-// truncation or corruption of a valid file crashes the loaders.
+// values of its closed form; malformed files raise SvmFileError naming file, line and field (the
+// try_ forms return the same problem and keep the model); no truncation or corruption of a valid
+// file crashes the loaders; a model at a run-time dimension (Eigen::Dynamic) reads, writes and
+// predicts as the fixed-size one.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -84,8 +86,8 @@ struct BadCase {
   std::string field;
 };
 
-TEST(SvmIo, MalformedLibsvmFilesNameLineAndField) {
-  const std::vector<BadCase> cases = {
+std::vector<BadCase> bad_libsvm_cases() {
+  return {
       {"bad gamma", "gamma 0.5", "gamma abc", 3, "gamma"},
       {"unknown kernel", "kernel_type rbf", "kernel_type sigmoid", 2, "kernel_type"},
       {"rho count", "rho 0.25", "rho 0.25 0.5", 6, "rho"},
@@ -100,7 +102,10 @@ TEST(SvmIo, MalformedLibsvmFilesNameLineAndField) {
       {"one class", "nr_class 2", "nr_class 1", 4, "nr_class"},
       {"huge label", "label 1 -1", "label 1 1e12", 7, "label"},
   };
-  for (const auto& c : cases) {
+}
+
+TEST(SvmIo, MalformedLibsvmFilesNameLineAndField) {
+  for (const auto& c : bad_libsvm_cases()) {
     std::string text = kHandLibsvm;
     const auto at = text.find(c.from);
     ASSERT_NE(at, std::string::npos) << c.what;
@@ -156,6 +161,130 @@ TEST(SvmIo, MalformedOwnFilesNameLineAndField) {
       EXPECT_EQ(e.file, "own.model");
     }
   }
+}
+
+// The non-throwing forms return the problem the throwing forms throw, and leave the model that
+// was passed in as it was.
+TEST(SvmIo, TryFormsReturnTheProblemAndKeepTheModel) {
+  std::istringstream good_in(kHandLibsvm);
+  const auto good = read_libsvm_model<2>(good_in, "hand.model");
+  for (const auto& c : bad_libsvm_cases()) {
+    std::string text = kHandLibsvm;
+    text.replace(text.find(c.from), c.from.size(), c.to);
+    const auto path = temp_file("try.model");
+    std::ofstream(path) << text;
+    SvmModel<2> model = good;
+    const auto problem = try_load_svm_model(path, model);
+    ASSERT_TRUE(problem.has_value()) << c.what;
+    EXPECT_EQ(problem->line, c.line) << c.what;
+    EXPECT_EQ(problem->field, c.field) << c.what;
+    EXPECT_EQ(problem->file, path.string());
+    expect_identical(model, good);
+    try {
+      (void)load_svm_model<2>(path);
+      ADD_FAILURE() << c.what << ": no error";
+    } catch (const SvmFileError& e) {
+      EXPECT_EQ(problem->what(), e.what());
+    }
+    std::filesystem::remove(path);
+  }
+  SvmModel<2> model = good;
+  const auto missing = try_load_svm_model(temp_file("does_not_exist.model"), model);
+  ASSERT_TRUE(missing.has_value());
+  EXPECT_EQ(missing->line, 0);
+  EXPECT_EQ(missing->field, "file");
+  const auto unwritable = try_save_svm_model(temp_file("no_such_folder") / "m.model", good);
+  ASSERT_TRUE(unwritable.has_value());
+  EXPECT_EQ(unwritable->message, "cannot open for writing");
+  expect_identical(model, good);
+}
+
+// decision value of machine m by the model's definition, with std::exp.
+template <int Dim, int MaxClasses>
+double closed_form_decision(const SvmModel<Dim, MaxClasses>& m, const Eigen::VectorXd& x, int machine) {
+  const Eigen::VectorXd xs = (x - Eigen::VectorXd(m.input_mean)).cwiseQuotient(Eigen::VectorXd(m.input_std));
+  double f = -m.rho[static_cast<std::size_t>(machine)];
+  for (Eigen::Index s = 0; s < m.support_vectors.rows(); ++s) {
+    const Eigen::VectorXd sv = m.support_vectors.row(s).transpose();
+    const double k = m.kernel == SvmKernel::linear ? sv.dot(xs) : std::exp(-m.gamma * (xs - sv).squaredNorm());
+    f += m.coefficients(machine, s) * k;
+  }
+  return f;
+}
+
+// SvmModel<Eigen::Dynamic>: read back from our format at the file's dimension, it predicts the
+// closed form and what the fixed-size model predicts, over several kernel blocks (300 support
+// vectors) and every layout; a feature vector of another length is refused, `out` untouched.
+TEST(SvmIo, RuntimeDimensionModelPredictsTheClosedFormAndTheFixedModel) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-3.0, 3.0);
+  for (auto layout : {SvmMulticlass::one_vs_one, SvmMulticlass::one_vs_rest})
+    for (auto kernel : {SvmKernel::linear, SvmKernel::rbf})
+      for (int classes : {2, 3, 5}) {
+        const auto fixed = ctxfuse::test::random_model<3>(kernel, layout, classes, 300, classes != 5, 7 + classes);
+        std::ostringstream os;
+        write_ctxfuse_svm_model(os, fixed);
+        std::istringstream in(os.str());
+        SvmModel<Eigen::Dynamic> model;
+        ASSERT_FALSE(try_read_ctxfuse_svm_model(in, "m", model).has_value());
+        ASSERT_EQ(model.dimension(), 3);
+        std::ostringstream again;
+        write_ctxfuse_svm_model(again, model);
+        EXPECT_EQ(again.str(), os.str());
+        for (int i = 0; i < 40; ++i) {
+          const Eigen::Vector3d x(u(rng), u(rng), u(rng));
+          const Eigen::VectorXd xd = x;
+          SvmPrediction<8> a, b;
+          ASSERT_TRUE(svm_predict(fixed, x, a));
+          ASSERT_TRUE(svm_predict(model, xd, b));
+          ASSERT_EQ(b.num_machines, a.num_machines);
+          for (int m = 0; m < b.num_machines; ++m) {
+            const double exact = closed_form_decision(model, xd, m);
+            const double scale = 1.0 + model.coefficients.row(m).cwiseAbs().sum();
+            EXPECT_NEAR(b.decision_values[static_cast<std::size_t>(m)], exact, 1e-14 * scale);
+            EXPECT_NEAR(b.decision_values[static_cast<std::size_t>(m)], a.decision_values[static_cast<std::size_t>(m)], 1e-14 * scale);
+          }
+          EXPECT_EQ(b.label, a.label);
+          for (int c = 0; c < (a.has_probabilities ? classes : 0); ++c)
+            EXPECT_NEAR(b.probabilities[static_cast<std::size_t>(c)], a.probabilities[static_cast<std::size_t>(c)], 1e-12);
+        }
+        SvmPrediction<8> out;
+        out.label = 12345;
+        for (int length : {2, 4}) {
+          const Eigen::VectorXd wrong = Eigen::VectorXd::Ones(length);
+          const ctxfuse::Status st = svm_predict(model, wrong, out);
+          EXPECT_EQ(st.outcome, ctxfuse::Outcome::invalid_input);
+          EXPECT_EQ(st.problem, ctxfuse::Problem::features_wrong_size);
+        }
+        EXPECT_EQ(out.label, 12345);
+      }
+}
+
+// A libsvm file states no dimension: at Eigen::Dynamic it is the largest feature index, or the
+// caller's (absent features are zero); a named dimension below an index is the file's problem.
+TEST(SvmIo, LibsvmDimensionIsTheLargestIndexUnlessNamed) {
+  std::istringstream in2(kHandLibsvm);
+  const auto fixed = read_libsvm_model<2>(in2, "hand.model");
+  SvmModel<Eigen::Dynamic> two, three;
+  std::istringstream a(kHandLibsvm), b(kHandLibsvm), c(kHandLibsvm);
+  ASSERT_FALSE(try_read_libsvm_model(a, "hand.model", two).has_value());
+  EXPECT_EQ(two.dimension(), 2);
+  EXPECT_EQ(two.support_vectors, fixed.support_vectors);
+  ASSERT_FALSE(try_read_libsvm_model(b, "hand.model", three, 3).has_value());
+  ASSERT_EQ(three.dimension(), 3);
+  EXPECT_EQ(three.support_vectors.leftCols(2), fixed.support_vectors);
+  EXPECT_TRUE(three.support_vectors.col(2).isZero(0.0));
+  const SvmModel<Eigen::Dynamic> before = two;
+  const auto problem = try_read_libsvm_model(c, "hand.model", two, 1);
+  ASSERT_TRUE(problem.has_value());
+  EXPECT_EQ(problem->line, 12);
+  EXPECT_EQ(problem->field, "SV feature index");
+  EXPECT_EQ(problem->message, "index 2 exceeds the model dimension 1");
+  expect_identical(two, before);
+  std::istringstream d(kHandLibsvm);
+  const auto negative = try_read_libsvm_model(d, "hand.model", two, -1);
+  ASSERT_TRUE(negative.has_value());
+  EXPECT_EQ(negative->field, "dimension");
 }
 
 TEST(SvmIo, HugeClaimedCountsFailAtTheEndOfFileWithoutAllocatingThem) {

@@ -1,5 +1,6 @@
 // Prediction must not touch the heap: every global operator new is counted while predicting
-// with RBF and linear models, one-vs-one and one-vs-rest, with and without probabilities.
+// with RBF and linear models, one-vs-one and one-vs-rest, with and without probabilities, at a
+// fixed and at a run-time dimension.
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -64,6 +65,40 @@ TEST(SvmNoAlloc, PredictionNeverAllocates) {
         EXPECT_EQ(g_allocations.load() - before, 0) << to_string(kernel) << ' ' << to_string(layout) << ' ' << classes;
         EXPECT_TRUE(std::isfinite(checksum));
       }
+}
+
+// The run-time dimension (SvmModel<Eigen::Dynamic>): its kernel loop keeps its values in a
+// fixed stack block too; the feature vector is the caller's.
+TEST(SvmNoAlloc, RuntimeDimensionPredictionNeverAllocates) {
+  for (auto kernel : {SvmKernel::rbf, SvmKernel::linear}) {
+    const auto fixed = ctxfuse::test::random_model<2>(kernel, SvmMulticlass::one_vs_one, 4, 1000, true, 6);
+    SvmModel<Eigen::Dynamic> model;
+    model.kernel = fixed.kernel;
+    model.multiclass = fixed.multiclass;
+    model.gamma = fixed.gamma;
+    model.num_classes = fixed.num_classes;
+    model.labels = fixed.labels;
+    model.input_mean = fixed.input_mean;
+    model.input_std = fixed.input_std;
+    model.support_vectors = fixed.support_vectors;
+    model.coefficients = fixed.coefficients;
+    model.rho = fixed.rho;
+    model.has_probability = fixed.has_probability;
+    model.prob_a = fixed.prob_a;
+    model.prob_b = fixed.prob_b;
+    finalize_svm_model(model);
+    SvmPrediction<8> out;
+    Eigen::VectorXd x(2);
+    double checksum = 0.0;
+    const long before = g_allocations.load();
+    for (int i = 0; i < 500; ++i) {
+      x << 0.01 * i - 2.0, 1.0 - 0.003 * i;
+      ASSERT_TRUE(svm_predict(model, x, out).accepted());
+      checksum += out.probabilities[0];
+    }
+    EXPECT_EQ(g_allocations.load() - before, 0) << to_string(kernel);
+    EXPECT_TRUE(std::isfinite(checksum));
+  }
 }
 
 }  // namespace

@@ -149,6 +149,37 @@ TEST(SvmTrain, ClassWeightRaisesRecallOfTheWeightedClass) {
   EXPECT_GT(weighted, plain + 20);
 }
 
+// Training at a run-time dimension (Eigen::Dynamic, as the tool trains) gives the fixed-size
+// model bit for bit (libsvm sees the same nodes), for both layouts; its cross-validation predicts
+// the same labels.
+TEST(SvmTrain, RuntimeDimensionTrainsTheFixedSizeModel) {
+  const auto data = ctxfuse::test::gaussian_clusters({{0, 0, 0}, {2, 1, 0}, {0, 2, 1}}, {4, 7, 9}, 40, {1.0, 1.5, 0.7}, 5);
+  const SvmFeatures<3> x3 = data.x;
+  const SvmFeatures<Eigen::Dynamic> xd = data.x;
+  for (auto layout : {SvmMulticlass::one_vs_one, SvmMulticlass::one_vs_rest}) {
+    SvmTrainOptions o;
+    o.multiclass = layout;
+    o.probability = true;
+    const auto fixed = train_svm<3>(x3, data.y, o);
+    const auto runtime = train_svm<Eigen::Dynamic>(xd, data.y, o);
+    ASSERT_EQ(runtime.dimension(), 3);
+    EXPECT_EQ(runtime.gamma, fixed.gamma);
+    EXPECT_EQ(runtime.labels, fixed.labels);
+    EXPECT_EQ(Eigen::VectorXd(runtime.input_mean), Eigen::VectorXd(fixed.input_mean));
+    EXPECT_EQ(Eigen::VectorXd(runtime.input_std), Eigen::VectorXd(fixed.input_std));
+    EXPECT_EQ(Eigen::MatrixXd(runtime.support_vectors), Eigen::MatrixXd(fixed.support_vectors));
+    EXPECT_EQ(runtime.coefficients, fixed.coefficients);
+    EXPECT_EQ(runtime.rho, fixed.rho);
+    EXPECT_EQ(runtime.prob_a, fixed.prob_a);
+    EXPECT_EQ(runtime.prob_b, fixed.prob_b);
+    const auto folds = stratified_folds(data.y, 4, 3);
+    const auto cv_fixed = cross_validate_svm<3>(x3, data.y, o, folds);
+    const auto cv_runtime = cross_validate_svm<Eigen::Dynamic>(xd, data.y, o, folds);
+    EXPECT_EQ(cv_runtime.predicted, cv_fixed.predicted);
+    EXPECT_EQ(cv_runtime.accuracy, cv_fixed.accuracy);
+  }
+}
+
 TEST(SvmTrain, RejectsBadData) {
   SvmFeatures<2> x(4, 2);
   x << 0, 0, 1, 1, 2, 2, 3, 3;

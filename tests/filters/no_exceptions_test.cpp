@@ -9,6 +9,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <sstream>
+#include <string>
+
 #include "all_lower_headers.hpp"
 
 namespace {
@@ -35,22 +39,25 @@ TEST(NoExceptions, StepsReportWithStatuses) {
 TEST(NoExceptions, SettingsAreCheckedWithoutThrowing) {
   SquareMatrix<2> bad;
   bad << 0.9, 0.2, 0.1, 0.9;  // first row sums to 1.1
-  EXPECT_EQ(policies::check_transition<2>(bad), Problem::transition_matrix_not_stochastic);
-  EXPECT_EQ(policies::check_transition<2>(policies::sticky_transition<2>(0.9)), Problem::none);
-  EXPECT_EQ(policies::check_sticky(1.5), Problem::invalid_setting);
-  EXPECT_EQ(policies::RegionAdaptiveTransition<2>::check(policies::sticky_transition<2>(0.9), 0.5, 0.6),
+  EXPECT_EQ(policies::check_transition<2>(bad).problem, Problem::transition_matrix_not_stochastic);
+  EXPECT_EQ(policies::check_transition<2>(bad).what, "transition matrix: a row does not sum to 1");
+  EXPECT_TRUE(policies::check_transition<2>(policies::sticky_transition<2>(0.9)));
+  EXPECT_EQ(policies::check_sticky(1.5).problem, Problem::invalid_setting);
+  EXPECT_EQ(policies::RegionAdaptiveTransition<2>::check(policies::sticky_transition<2>(0.9), 0.5, 0.6).problem,
             Problem::invalid_setting);
-  EXPECT_EQ(policies::RegionAdaptiveTransition<2>::check(bad, 0.5, 0.5), Problem::transition_matrix_not_stochastic);
-  EXPECT_EQ((policies::PosteriorPull<2, policies::FixedTransition<2>>::check(-0.1)), Problem::invalid_setting);
-  EXPECT_EQ((fkf::FederatedFilter<Cv, 2>::check_shares({0.5, 0.6})), Problem::invalid_setting);
-  EXPECT_EQ((fkf::FederatedFilter<Cv, 2>::check_shares({0.5, 0.5})), Problem::none);
-  EXPECT_EQ(policies::check_options(policies::SnapshotIntegrityOptions{.probability = 1.0}), Problem::invalid_setting);
-  EXPECT_EQ(policies::check_options(policies::SnapshotIntegrityOptions{}), Problem::none);
+  EXPECT_EQ(policies::RegionAdaptiveTransition<2>::check(bad, 0.5, 0.5).problem, Problem::transition_matrix_not_stochastic);
+  EXPECT_EQ((policies::PosteriorPull<2, policies::FixedTransition<2>>::check(-0.1)).problem, Problem::invalid_setting);
+  EXPECT_EQ((fkf::FederatedFilter<Cv, 2>::check_shares({0.5, 0.6})).problem, Problem::invalid_setting);
+  EXPECT_TRUE((fkf::FederatedFilter<Cv, 2>::check_shares({0.5, 0.5})));
+  const SettingCheck integrity = policies::check_options(policies::SnapshotIntegrityOptions{.probability = 1.0});
+  EXPECT_EQ(integrity.problem, Problem::invalid_setting);
+  EXPECT_EQ(integrity.what, "SnapshotIntegrity: probability must be in (0, 1)");
+  EXPECT_TRUE(policies::check_options(policies::SnapshotIntegrityOptions{}));
 }
 
 TEST(NoExceptions, AnImmRunsOnCheckedSettings) {
   const SquareMatrix<2> P = policies::sticky_transition<2>(0.95);
-  ASSERT_EQ(policies::check_transition<2>(P), Problem::none);
+  ASSERT_TRUE(policies::check_transition<2>(P));
   auto modes = boost::hana::make_tuple(imm::make_mode(Cv{0.05}), imm::make_mode(Cv{5.0}));
   imm::Imm filter(policies::FixedTransition<2>(P), modes, prior(), Vector<2>(0.5, 0.5));
   struct Fix {};
@@ -98,6 +105,40 @@ TEST(NoExceptions, ClassifiersAndExtractorsReportWithStatuses) {
   EXPECT_TRUE(features::GnssSceneConfig{}.check());
   EXPECT_EQ(classify::ConsistencyModel{.sigma_uwb = -1.0}.check().problem, Problem::invalid_setting);
   EXPECT_TRUE(classify::ConsistencyModel{}.check());
+}
+
+TEST(NoExceptions, SvmModelFilesLoadWithoutThrowing) {
+  // A two-class RBF model in our format, read at a run-time dimension: f(x) = exp(-|x|^2) - 0.5.
+  const std::string text =
+      "ctxfuse-svm 1\ndimension 2\nkernel rbf\ngamma 1\nmulticlass ovo\nlabels 1 -1\ninput_mean 0 0\n"
+      "input_std 1 1\nrho 0.5\nprobability 0\nsupport_vectors 1\n1 0 0\nend\n";
+  std::istringstream in(text);
+  classify::SvmModel<Eigen::Dynamic, 2> model;
+  ASSERT_FALSE(classify::try_read_ctxfuse_svm_model(in, "mem", model).has_value());
+  EXPECT_EQ(model.dimension(), 2);
+  classify::SvmPrediction<2> out;
+  const Eigen::VectorXd x = Eigen::VectorXd::Constant(2, 0.5), three = Eigen::VectorXd::Zero(3);
+  ASSERT_TRUE(classify::svm_predict(model, x, out));
+  EXPECT_NEAR(out.decision_values[0], std::exp(-0.5) - 0.5, 1e-15);
+  EXPECT_EQ(classify::svm_predict(model, three, out).problem, Problem::features_wrong_size);
+
+  // A malformed file: the problem names line and field, and the model is left as it was.
+  std::string bad = text;
+  bad.replace(bad.find("gamma 1"), 7, "gamma x");
+  std::istringstream bad_in(bad);
+  const auto problem = classify::try_read_ctxfuse_svm_model(bad_in, "mem", model);
+  ASSERT_TRUE(problem.has_value());
+  EXPECT_EQ(problem->what(), "mem:4: gamma: expected a finite number, got 'x'");
+  EXPECT_EQ(model.gamma, 1.0);
+  const auto missing = classify::try_load_svm_model("/nonexistent/ctxfuse.model", model);
+  ASSERT_TRUE(missing.has_value());
+  EXPECT_EQ(missing->field, "file");
+  EXPECT_EQ(model.num_support_vectors(), 1);
+}
+
+TEST(NoExceptionsDeathTest, AThrowingReaderStopsNamingTheProblem) {
+  EXPECT_DEATH((void)classify::load_svm_model<2>("/nonexistent/ctxfuse.model"),
+               "ctxfuse: /nonexistent/ctxfuse.model: file: cannot open for reading");
 }
 
 TEST(NoExceptionsDeathTest, AConstructorGivenARefusedSettingStopsNamingIt) {

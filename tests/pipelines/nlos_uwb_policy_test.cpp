@@ -83,6 +83,34 @@ TEST(NlosUwbPolicy, NoHandlingAttachesEverything) {
   EXPECT_EQ(select(nu::NoNlosHandling{}, {verdict(0.95), verdict(0.99), verdict(0.9), verdict(0.91)}), kAll4);
 }
 
+// The run-time choice selects what the policy it names selects, on every epoch of 1-6 ranges
+// drawn with R in {no evidence, 0.05 .. 0.95}.
+TEST(NlosUwbPolicy, RunTimeChoiceSelectsAsTheNamedPolicy) {
+  const std::array<double, 8> levels{std::nan(""), 0.05, 0.25, 0.3, 0.35, 0.7, 0.81, 0.95};
+  unsigned state = 12345u;
+  const auto next = [&] { return (state = state * 1103515245u + 12345u) >> 16; };
+  int epochs = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    std::vector<nu::RangeVerdict> epoch(1 + next() % 6);
+    for (auto& v : epoch) {
+      const double R = levels[next() % levels.size()];
+      v = std::isnan(R) ? nu::RangeVerdict{} : verdict(R);
+    }
+    EXPECT_EQ(select(nu::NlosPolicyChoice{nu::NlosHandling::paper_epoch_rule}, epoch), select(nu::PaperEpochRule{}, epoch));
+    EXPECT_EQ(select(nu::NlosPolicyChoice{nu::NlosHandling::per_range}, epoch), select(nu::PerRangeRule{}, epoch));
+    EXPECT_EQ(select(nu::NlosPolicyChoice{nu::NlosHandling::none}, epoch), select(nu::NoNlosHandling{}, epoch));
+    ++epochs;
+  }
+  EXPECT_EQ(epochs, 2000);
+  // The paper rule's settings travel with the choice: a threshold above every belief leaves the
+  // mixed epoch out that the default attaches.
+  const std::vector<nu::RangeVerdict> mixed{verdict(0.95), verdict(0.1), verdict(0.2), verdict(0.25)};
+  nu::NlosPolicyChoice strict{nu::NlosHandling::paper_epoch_rule};
+  strict.paper.rule.mixed_belief_threshold = 0.99;
+  EXPECT_EQ(select(nu::NlosPolicyChoice{nu::NlosHandling::paper_epoch_rule}, mixed), kAll4);
+  EXPECT_EQ(select(strict, mixed), kNone4);
+}
+
 TEST(NlosUwbClassifier, ConsistencyAloneFollowsEquationSix) {
   // Without an SVM, R is p2. One anchor, ranges 0.1 s apart, platform speed 1 m/s: travelled
   // d_d = 0.1 m, e = |d_rho| - 0.1, sigma = 0.1: p2 = 0.35 (e <= 0.1), 0.55 (0.1 < e <= 0.2),

@@ -18,6 +18,8 @@
 #include <string_view>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "cli/json.hpp"
 #include "cli/registry.hpp"
 #include "ctxfuse/classify/svm_folds.hpp"
@@ -26,7 +28,6 @@
 
 namespace ctxfuse::cli::classify_cli {
 
-inline constexpr int kMaxCliDim = 8;
 inline constexpr int kMaxCliClasses = 8;
 
 /// A problem with the user's input: exit status 1.
@@ -103,9 +104,6 @@ inline LabelledCsv read_labelled_csv(io::TextFile& file, const ColumnSelection& 
   LabelledCsv csv;
   for (int c : feature_cols) csv.feature_names.push_back(header.name(static_cast<std::size_t>(c)));
   if (csv.feature_names.empty()) file.fail("no feature columns selected");
-  if (csv.feature_names.size() > static_cast<std::size_t>(kMaxCliDim))
-    file.fail(io::cat(csv.feature_names.size(), " feature columns; the CLI supports 1 to ", kMaxCliDim,
-                      " (choose with --features or --ignore)"));
   std::map<double, int> group_index;
   const auto at = [](int c) { return static_cast<std::size_t>(c); };
   io::Fields f(file.name(), &header);
@@ -188,27 +186,9 @@ inline void print_metrics(std::span<const int> classes, const classify::Confusio
   json["confusion"] = Json(std::move(confusion));
 }
 
-template <int Dim>
-Eigen::Matrix<double, Dim, 1> row_vector(const std::vector<double>& row) {
-  Eigen::Matrix<double, Dim, 1> x;
-  for (int f = 0; f < Dim; ++f) x[f] = row[static_cast<std::size_t>(f)];
-  return x;
-}
-
-/// Fn<Dim>::run(a...) for the run-time feature count.
-template <template <int> class Fn, class... A>
-int dispatch_dim(int dim, A&&... a) {
-  switch (dim) {
-    case 1: return Fn<1>::run(a...);
-    case 2: return Fn<2>::run(a...);
-    case 3: return Fn<3>::run(a...);
-    case 4: return Fn<4>::run(a...);
-    case 5: return Fn<5>::run(a...);
-    case 6: return Fn<6>::run(a...);
-    case 7: return Fn<7>::run(a...);
-    case 8: return Fn<8>::run(a...);
-    default: throw InputError("feature dimension " + std::to_string(dim) + " outside 1..8");
-  }
+/// One CSV row's features as the run-time sized vector of an SvmModel<Eigen::Dynamic>.
+inline Eigen::VectorXd row_vector(const std::vector<double>& row) {
+  return Eigen::Map<const Eigen::VectorXd>(row.data(), static_cast<Eigen::Index>(row.size()));
 }
 
 int classify_train(Args args, std::ostream& out, std::ostream& err);

@@ -2,6 +2,7 @@
 // balanced accuracy, macro-F1, per-class precision / recall / F1 and the labelled confusion
 // matrix, classes in ascending label order (ctxfuse/classify/confusion_matrix.hpp).
 #include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <ostream>
@@ -24,9 +25,11 @@ struct TestSettings {
   ColumnSelection columns;
 };
 
-template <int Dim>
-int test_dim(const LabelledCsv& csv, const TestSettings& s, std::ostream& out) {
-  const auto model = load_svm_model<Dim, kMaxCliClasses>(s.model);
+// The model's dimension is a run-time value (SvmModel<Eigen::Dynamic>): one instantiation
+// serves every feature count.
+using TestModel = SvmModel<Eigen::Dynamic, kMaxCliClasses>;
+
+int test_model(const TestModel& model, const LabelledCsv& csv, const TestSettings& s, std::ostream& out) {
   const std::vector<int> model_labels(model.labels.begin(), model.labels.begin() + model.num_classes);
   // Classes in ascending order: the model's and any seen only in the data.
   std::vector<int> all = model_labels;
@@ -47,7 +50,7 @@ int test_dim(const LabelledCsv& csv, const TestSettings& s, std::ostream& out) {
   std::vector<int> predicted(csv.rows.size());
   SvmPrediction<kMaxCliClasses> p;
   for (std::size_t i = 0; i < csv.rows.size(); ++i) {
-    if (!svm_predict(model, row_vector<Dim>(csv.rows[i]), p))  // the reader refused non-finite rows
+    if (!svm_predict(model, row_vector(csv.rows[i]), p))  // the reader refused non-finite rows
       throw std::logic_error("classify: a checked row was refused by the SVM");
     predicted[i] = p.label;
     if (!predictions.is_open()) continue;
@@ -86,11 +89,6 @@ int test_dim(const LabelledCsv& csv, const TestSettings& s, std::ostream& out) {
   return 0;
 }
 
-template <int Dim>
-struct TestFn {
-  static int run(const LabelledCsv& csv, const TestSettings& s, std::ostream& out) { return test_dim<Dim>(csv, s, out); }
-};
-
 }  // namespace
 
 int classify_test(Args args, std::ostream& out, std::ostream& err) {
@@ -108,11 +106,13 @@ int classify_test(Args args, std::ostream& out, std::ostream& err) {
   try {
     const auto csv = read_labelled_csv(s.data, s.columns);
     const int dim = static_cast<int>(csv.feature_names.size());
-    const int model_dim = svm_file_dimension(s.model);
-    if (model_dim != 0 && model_dim != dim)
-      throw InputError(s.model + ": model expects " + std::to_string(model_dim) + " features, " + s.data + " has " + std::to_string(dim) +
-                       " selected");
-    return dispatch_dim<TestFn>(dim, csv, s, out);
+    // Our files state their dimension; a libsvm model is used on the selected features as given.
+    const bool libsvm = detect_svm_file_format(std::filesystem::path(s.model)) == SvmFileFormat::libsvm;
+    const auto model = load_svm_model<Eigen::Dynamic, kMaxCliClasses>(s.model, libsvm ? dim : 0);
+    if (model.dimension() != dim)
+      throw InputError(s.model + ": model expects " + std::to_string(model.dimension()) + " features, " + s.data + " has " +
+                       std::to_string(dim) + " selected");
+    return test_model(model, csv, s, out);
   } catch (const SvmFileError& e) {
     err << "ctxfuse classify test: error: " << e.what() << '\n';
     return 1;

@@ -90,13 +90,17 @@ std::pair<std::vector<int>, std::string> make_folds(const LabelledCsv& csv, cons
   return {block_folds(csv.labels.size(), s.folds), std::to_string(s.folds) + " contiguous blocks (row order)"};
 }
 
-template <int Dim>
-int train_dim(const LabelledCsv& csv, const TrainSettings& s, std::ostream& out, std::ostream& err) {
+// Features, training and the model at a run-time dimension (Eigen::Dynamic): one instantiation
+// of the training, the search and the model I/O serves every feature count.
+constexpr int kAnyDim = Eigen::Dynamic;
+
+int train(const LabelledCsv& csv, const TrainSettings& s, std::ostream& out, std::ostream& err) {
+  const auto dim = static_cast<Eigen::Index>(csv.feature_names.size());
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   const auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
-  SvmFeatures<Dim> x(static_cast<Eigen::Index>(csv.rows.size()), Dim);
-  for (std::size_t i = 0; i < csv.rows.size(); ++i) x.row(static_cast<Eigen::Index>(i)) = row_vector<Dim>(csv.rows[i]).transpose();
+  SvmFeatures<kAnyDim> x(static_cast<Eigen::Index>(csv.rows.size()), dim);
+  for (std::size_t i = 0; i < csv.rows.size(); ++i) x.row(static_cast<Eigen::Index>(i)) = row_vector(csv.rows[i]).transpose();
 
   SvmTrainOptions options;
   options.kernel = s.kernel == "linear" ? SvmKernel::linear : SvmKernel::rbf;
@@ -110,7 +114,7 @@ int train_dim(const LabelledCsv& csv, const TrainSettings& s, std::ostream& out,
   const CvScore score = parse_score(s.score);
 
   const auto classes = labels_sorted(csv.labels);
-  out << "training  " << csv.rows.size() << " samples, " << Dim << " features (";
+  out << "training  " << csv.rows.size() << " samples, " << dim << " features (";
   for (std::size_t f = 0; f < csv.feature_names.size(); ++f) out << (f ? "," : "") << csv.feature_names[f];
   out << "), " << classes.size() << " classes, kernel " << s.kernel << ", " << s.multiclass
       << (options.standardize ? ", standardised" : ", raw features") << '\n';
@@ -145,18 +149,18 @@ int train_dim(const LabelledCsv& csv, const TrainSettings& s, std::ostream& out,
       if (options.kernel == SvmKernel::rbf) err << ", gamma " << p.gamma;
       err << " (" << std::fixed << std::setprecision(1) << elapsed() << " s)\n" << std::defaultfloat << std::flush;
     };
-    const auto t = tune_svm_pso<Dim, kMaxCliClasses>(x, csv.labels, options, tune);
+    const auto t = tune_svm_pso<kAnyDim, kMaxCliClasses>(x, csv.labels, options, tune);
     options.C = t.C;
     if (options.kernel == SvmKernel::rbf) options.gamma = t.gamma;
     out << "pso       " << t.evaluations << " cross-validations on " << t.search_samples << " of " << csv.rows.size()
         << " samples, best " << to_string(score) << " " << percent(t.cv_accuracy) << '\n';
   }
-  const double gamma = options.gamma > 0 ? options.gamma : 1.0 / Dim;
+  const double gamma = options.gamma > 0 ? options.gamma : 1.0 / static_cast<double>(dim);
   out << "params    C " << std::setprecision(6) << options.C;
   if (options.kernel == SvmKernel::rbf) out << ", gamma " << gamma;
   out << '\n';
   if (s.report_cv) {
-    const auto cv = cross_validate_svm<Dim, kMaxCliClasses>(
+    const auto cv = cross_validate_svm<kAnyDim, kMaxCliClasses>(
         x, csv.labels, options, folds, score, [&](int f, int n, std::size_t done, double so_far) {
           err << "cv: fold " << f + 1 << "/" << n << ", " << done << " samples scored, " << to_string(score) << " so far "
               << percent(so_far) << " (" << std::fixed << std::setprecision(1) << elapsed() << " s)\n" << std::defaultfloat << std::flush;
@@ -166,11 +170,11 @@ int train_dim(const LabelledCsv& csv, const TrainSettings& s, std::ostream& out,
   }
   err << "fit: all " << csv.rows.size() << " samples (" << std::fixed << std::setprecision(1) << elapsed() << " s)\n"
       << std::defaultfloat << std::flush;
-  const auto model = train_svm<Dim, kMaxCliClasses>(x, csv.labels, options);
+  const auto model = train_svm<kAnyDim, kMaxCliClasses>(x, csv.labels, options);
   std::vector<int> predicted(csv.rows.size());
   SvmPrediction<kMaxCliClasses> p;
   for (std::size_t i = 0; i < csv.rows.size(); ++i) {
-    if (!svm_predict(model, row_vector<Dim>(csv.rows[i]), p))  // the reader refused non-finite rows
+    if (!svm_predict(model, row_vector(csv.rows[i]), p))  // the reader refused non-finite rows
       throw std::logic_error("classify: a checked row was refused by the SVM");
     predicted[i] = p.label;
   }
@@ -183,18 +187,11 @@ int train_dim(const LabelledCsv& csv, const TrainSettings& s, std::ostream& out,
   return 0;
 }
 
-template <int Dim>
-struct TrainFn {
-  static int run(const LabelledCsv& csv, const TrainSettings& s, std::ostream& out, std::ostream& err) {
-    return train_dim<Dim>(csv, s, out, err);
-  }
-};
-
 }  // namespace
 
 int classify_train(Args args, std::ostream& out, std::ostream& err) {
   auto app = make_app("classify train",
-                      "Trains a libsvm C-SVC on a labelled CSV (header line, integer label column, 1..8 feature columns) and\n"
+                      "Trains a libsvm C-SVC on a labelled CSV (header line, integer label column, feature columns) and\n"
                       "writes a ctxfuse-svm model (inputs standardised on the training data, mean/std stored in the model).\n"
                       "Validation folds (for --pso and the cross-validation report): --cv auto = whole groups with --groups,\n"
                       "else contiguous blocks in row order (time-ordered data); stratified = shuffled rows.");
@@ -224,7 +221,7 @@ int classify_train(Args args, std::ostream& out, std::ostream& err) {
   s.report_cv = folds->count() > 0 || app.get_option("--cv")->count() > 0 || app.get_option("--groups")->count() > 0;
   try {
     const auto csv = read_labelled_csv(s.data, s.columns);
-    return dispatch_dim<TrainFn>(static_cast<int>(csv.feature_names.size()), csv, s, out, err);
+    return train(csv, s, out, err);
   } catch (const CLI::ValidationError& e) {
     err << "ctxfuse classify train: " << e.what() << '\n';
     return 2;

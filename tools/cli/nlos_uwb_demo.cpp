@@ -211,9 +211,10 @@ void latency_section(const DemoContext& ctx, Json& json, std::ostream& out) {
   // all) with the SVM; beside it the same run without the SVM and without the rule.
   const std::span<const messages::UwbRange> rs(r.drive_ranges.ranges);
   const auto t0 = std::chrono::steady_clock::now();
-  const nu::Track total = nu::run(rs, nu::RangeSmoother<>(s), nu::PaperEpochRule{}, nu::NlosClassifier(s, r.svm_model), s);
+  const nu::Track total = nu::run(rs, nu::RangeSmoother<>(s), nu::NlosPolicyChoice{nu::NlosHandling::paper_epoch_rule},
+                                  nu::NlosClassifier(s, r.svm_model), s);
   const auto t1 = std::chrono::steady_clock::now();
-  const nu::Track fusion = nu::run(rs, nu::RangeSmoother<>(s), nu::NoNlosHandling{}, nu::NlosClassifier(s), s);
+  const nu::Track fusion = nu::run(rs, nu::RangeSmoother<>(s), nu::NlosPolicyChoice{nu::NlosHandling::none}, nu::NlosClassifier(s), s);
   const auto t2 = std::chrono::steady_clock::now();
   const double per_range = 1.0 / static_cast<double>(rs.size());
   const double total_us = std::chrono::duration<double, std::micro>(t1 - t0).count() * per_range;

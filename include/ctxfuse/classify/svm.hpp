@@ -1,4 +1,5 @@
-// Support vector machine inference with the feature dimension fixed at compile time.
+// Support vector machine inference with the feature dimension fixed at compile time, or (Dim =
+// Eigen::Dynamic) set by the model at run time.
 //
 // One representation covers every machine layout: a set of support vectors (stored
 // structure-of-arrays, one contiguous column per feature) and a dense coefficient matrix with one
@@ -16,6 +17,12 @@
 // Prediction never allocates: outputs go into SvmPrediction's fixed arrays and the kernel values
 // live in a fixed stack block. The RBF kernel loop is in svm_rbf.hpp (vectorised, with an AVX2
 // variant picked at run time on x86-64).
+//
+// SvmModel<Eigen::Dynamic> takes its dimension from the file or the training data: one
+// instantiation serves every feature count (the tool's commands, any CSV), at the price of a
+// plain loop over the features (svm_detail::rbf_sums_runtime, no instruction-set variants) and a
+// size check on every input (Problem::features_wrong_size). Pipelines that know their features
+// use a fixed Dim.
 #pragma once
 
 #include <Eigen/Core>
@@ -54,9 +61,21 @@ constexpr int svm_max_machines(int max_classes) {
   return std::max(max_classes * (max_classes - 1) / 2, max_classes);
 }
 
+namespace svm_detail {
+/// A fixed-size Eigen object filled with `value`; an empty one for a run-time size.
+template <class M>
+M filled_or_empty(double value) {
+  if constexpr (M::SizeAtCompileTime == Eigen::Dynamic) {
+    return M();
+  } else {
+    return M::Constant(value);
+  }
+}
+}  // namespace svm_detail
+
 template <int Dim, int MaxClasses = 8>
 struct SvmModel {
-  static_assert(Dim >= 1, "feature dimension must be positive");
+  static_assert(Dim >= 1 || Dim == Eigen::Dynamic, "feature dimension must be positive (or Eigen::Dynamic)");
   static_assert(MaxClasses >= 2 && MaxClasses <= 32, "MaxClasses must be in [2, 32]");
   static constexpr int kDim = Dim;
   static constexpr int kMaxClasses = MaxClasses;
@@ -68,14 +87,17 @@ struct SvmModel {
   SvmKernel kernel = SvmKernel::rbf;
   // For two classes both layouts are the same single machine; the field then only records intent.
   SvmMulticlass multiclass = SvmMulticlass::one_vs_one;
-  double gamma = 1.0 / Dim;  // RBF width: K(a, b) = exp(-gamma |a - b|^2); unused for linear
+  // RBF width: K(a, b) = exp(-gamma |a - b|^2); unused for linear. 1 / Dim unless set (a
+  // run-time dimension has no default: its loaders and training set it).
+  double gamma = Dim == Eigen::Dynamic ? 0.0 : 1.0 / Dim;
   int num_classes = 0;
   // Class labels as in the training data. One-vs-one pair (i, j), i < j, votes labels[i] when its
   // decision value is > 0 (libsvm's convention); one-vs-rest machine m says labels[m] when > 0.
   std::array<int, MaxClasses> labels{};
-  // Standardisation fitted on the training data; libsvm files carry none (mean 0, std 1).
-  Feature input_mean = Feature::Zero();
-  Feature input_std = Feature::Ones();
+  // Standardisation fitted on the training data; libsvm files carry none (mean 0, std 1). With a
+  // run-time dimension, input_mean's size is the model's dimension.
+  Feature input_mean = svm_detail::filled_or_empty<Feature>(0.0);
+  Feature input_std = svm_detail::filled_or_empty<Feature>(1.0);
   SupportVectors support_vectors;  // num_sv x Dim, in standardised units
   Coefficients coefficients;       // num_machines x num_sv: y_i alpha_i per machine
   std::array<double, kMaxMachines> rho{};
@@ -84,8 +106,16 @@ struct SvmModel {
   std::array<double, kMaxMachines> prob_a{};
   std::array<double, kMaxMachines> prob_b{};
   // Derived by finalize_svm_model for the linear kernel: w_m = sum_s coefficients(m, s) sv_s.
-  Eigen::Matrix<double, kMaxMachines, Dim> linear_weights = Eigen::Matrix<double, kMaxMachines, Dim>::Zero();
+  Eigen::Matrix<double, kMaxMachines, Dim> linear_weights =
+      svm_detail::filled_or_empty<Eigen::Matrix<double, kMaxMachines, Dim>>(0.0);
 
+  int dimension() const {
+    if constexpr (Dim == Eigen::Dynamic) {
+      return static_cast<int>(input_mean.size());
+    } else {
+      return Dim;
+    }
+  }
   int num_machines() const { return svm_machine_count(multiclass, num_classes); }
   Eigen::Index num_support_vectors() const { return support_vectors.rows(); }
 };
@@ -101,6 +131,15 @@ std::string svm_model_problem(const SvmModel<Dim, MaxClasses>& m) {
         return "label " + std::to_string(m.labels[static_cast<std::size_t>(i)]) + " appears twice";
   if (m.kernel == SvmKernel::rbf && !(std::isfinite(m.gamma) && m.gamma > 0.0))
     return "gamma must be finite and > 0 for the RBF kernel";
+  if constexpr (Dim == Eigen::Dynamic) {
+    const auto d = m.input_mean.size();
+    if (d < 1) return "dimension not set (input_mean is empty)";
+    if (m.input_std.size() != d)
+      return "input_std has " + std::to_string(m.input_std.size()) + " entries for dimension " + std::to_string(d);
+    if (m.support_vectors.cols() != d)
+      return "support vectors have " + std::to_string(m.support_vectors.cols()) + " features for dimension " +
+             std::to_string(d);
+  }
   if (!m.input_mean.allFinite()) return "input_mean contains NaN or Inf";
   if (!m.input_std.allFinite() || (m.input_std.array() <= 0.0).any()) return "input_std must be finite and > 0";
   const int machines = m.num_machines();
@@ -127,7 +166,7 @@ std::string svm_model_problem(const SvmModel<Dim, MaxClasses>& m) {
 template <int Dim, int MaxClasses>
 void finalize_svm_model(SvmModel<Dim, MaxClasses>& m) {
   if (auto problem = svm_model_problem(m); !problem.empty()) ctxfuse::detail::invalid_setting("SVM model: " + problem);
-  m.linear_weights.setZero();
+  m.linear_weights.setZero(SvmModel<Dim, MaxClasses>::kMaxMachines, m.dimension());
   if (m.kernel == SvmKernel::linear)
     m.linear_weights.topRows(m.num_machines()) = m.coefficients * m.support_vectors;
 }
@@ -246,9 +285,54 @@ void rbf_sums(const SvmModel<Dim, MaxClasses>& model, const Eigen::Matrix<double
   if (single) sums[0] = work.sum();
 }
 
+/// The kernel sums of every machine for a run-time dimension: x standardised feature by feature
+/// on the fly, squared distances of a block of support vectors accumulated one feature column
+/// at a time (contiguous loads), then the same exponential as the fixed-size kernel
+/// (exp_neg_gamma, clamped at 708 / gamma). No instruction-set variants, no allocation.
+template <int MaxClasses>
+void rbf_sums_runtime(const SvmModel<Eigen::Dynamic, MaxClasses>& model, const Eigen::VectorXd& x, int machines,
+                      double* sums) {
+  const Eigen::Index dim = model.dimension();
+  const Eigen::Index n = model.support_vectors.rows();
+  const RbfExp e = rbf_exp_constants(model.gamma);
+  std::array<double, kRbfBlock> k{};  // squared distances, then kernel values
+  for (Eigen::Index start = 0; start < n; start += kRbfBlock) {
+    const auto len = static_cast<std::size_t>(std::min<Eigen::Index>(kRbfBlock, n - start));
+    std::fill_n(k.begin(), len, 0.0);
+    for (Eigen::Index f = 0; f < dim; ++f) {
+      const double xs = (x[f] - model.input_mean[f]) / model.input_std[f];
+      const double* column = model.support_vectors.col(f).data() + start;
+      for (std::size_t i = 0; i < len; ++i) {
+        const double d = column[i] - xs;
+        k[i] += d * d;
+      }
+    }
+    for (std::size_t i = 0; i < len; ++i) k[i] = exp_neg_gamma(k[i] < e.d2_max ? k[i] : e.d2_max, e);
+    for (int m = 0; m < machines; ++m) {
+      const double* coef = model.coefficients.row(m).data() + start;
+      double sum = 0.0;
+      for (std::size_t i = 0; i < len; ++i) sum += coef[i] * k[i];
+      sums[m] += sum;
+    }
+  }
+}
+
+/// Linear-kernel decision sums for a run-time dimension, x standardised on the fly.
+template <int MaxClasses>
+void linear_sums_runtime(const SvmModel<Eigen::Dynamic, MaxClasses>& model, const Eigen::VectorXd& x, int machines,
+                         double* sums) {
+  for (int m = 0; m < machines; ++m) {
+    double sum = 0.0;
+    for (Eigen::Index f = 0; f < model.dimension(); ++f)
+      sum += model.linear_weights(m, f) * ((x[f] - model.input_mean[f]) / model.input_std[f]);
+    sums[m] = sum;
+  }
+}
+
 }  // namespace svm_detail
 
-/// x' = (x - input_mean) / input_std, the transform the support vectors live in.
+/// x' = (x - input_mean) / input_std, the transform the support vectors live in (for a
+/// run-time dimension, x must have the model's; this allocates the result).
 template <int Dim, int MaxClasses>
 Eigen::Matrix<double, Dim, 1> svm_standardize(const SvmModel<Dim, MaxClasses>& model,
                                               const Eigen::Matrix<double, Dim, 1>& x) {
@@ -339,19 +423,30 @@ void add_probabilities(const SvmModel<Dim, MaxClasses>& model, SvmPrediction<Max
 
 /// Decision values of every machine into out.decision_values, and the label by vote (one-vs-one,
 /// ties to the lower class index, as libsvm) or by the largest decision value (one-vs-rest).
-/// Returns accepted, or refuses a feature vector with NaN/Inf (Problem::non_finite_features) or
-/// a feature above 1e150 (Problem::feature_magnitude); on a refusal `out` is left untouched.
+/// Returns accepted, or refuses a feature vector with NaN/Inf (Problem::non_finite_features), a
+/// feature above 1e150 (Problem::feature_magnitude) or, for a run-time dimension, a length other
+/// than the model's (Problem::features_wrong_size); on a refusal `out` is left untouched.
 template <int Dim, int MaxClasses>
 Status svm_decision(const SvmModel<Dim, MaxClasses>& model, const Eigen::Matrix<double, Dim, 1>& x,
                     SvmPrediction<MaxClasses>& out) {
-  if (const Status status = svm_detail::input_status(x); !status) return status;
-  const Eigen::Matrix<double, Dim, 1> xs = svm_standardize(model, x);
   const int machines = model.num_machines();
   std::array<double, SvmModel<Dim, MaxClasses>::kMaxMachines> sums{};
-  if (model.kernel == SvmKernel::linear) {
-    for (int m = 0; m < machines; ++m) sums[static_cast<std::size_t>(m)] = model.linear_weights.row(m).dot(xs);
+  if constexpr (Dim == Eigen::Dynamic) {
+    if (x.size() != model.dimension()) return Status::invalid(Problem::features_wrong_size);
+    if (const Status status = svm_detail::input_status(x); !status) return status;
+    if (model.kernel == SvmKernel::linear) {
+      svm_detail::linear_sums_runtime(model, x, machines, sums.data());
+    } else {
+      svm_detail::rbf_sums_runtime(model, x, machines, sums.data());
+    }
   } else {
-    svm_detail::rbf_sums(model, xs, machines, sums.data());
+    if (const Status status = svm_detail::input_status(x); !status) return status;
+    const Eigen::Matrix<double, Dim, 1> xs = svm_standardize(model, x);
+    if (model.kernel == SvmKernel::linear) {
+      for (int m = 0; m < machines; ++m) sums[static_cast<std::size_t>(m)] = model.linear_weights.row(m).dot(xs);
+    } else {
+      svm_detail::rbf_sums(model, xs, machines, sums.data());
+    }
   }
   svm_detail::finish_decision(model, sums.data(), out);
   return {};

@@ -105,6 +105,7 @@ struct SvmFastReport {
 /// exact path uses; build allocates, prediction never does. Thread-safe for concurrent queries.
 template <int Dim, int MaxClasses = 8>
 class SvmFastRbf {
+  static_assert(Dim != Eigen::Dynamic, "SvmFastRbf needs the feature dimension at compile time (its expansion is built for it)");
  public:
   using Model = SvmModel<Dim, MaxClasses>;
   using Feature = typename Model::Feature;

@@ -33,7 +33,9 @@
 namespace ctxfuse::classify {
 
 
-/// Features as rows of an N x Dim matrix, labels one per row.
+/// Features as rows of an N x Dim matrix, labels one per row. Every function here also takes
+/// Dim = Eigen::Dynamic (the dimension is then the matrix's column count; the model is an
+/// SvmModel<Eigen::Dynamic>): one instantiation for any feature count.
 template <int Dim>
 using SvmFeatures = Eigen::Matrix<double, Eigen::Dynamic, Dim>;
 
@@ -53,14 +55,16 @@ struct Problem {
   std::vector<svm_node*> rows;
   std::vector<double> y;
   svm_problem prob{};
-  Problem(const SvmFeatures<Dim>& x, std::span<const double> targets) : nodes(static_cast<std::size_t>(x.rows()) * (Dim + 1)) {
+  Problem(const SvmFeatures<Dim>& x, std::span<const double> targets)
+      : nodes(static_cast<std::size_t>(x.rows()) * static_cast<std::size_t>(x.cols() + 1)) {
     const auto n = static_cast<std::size_t>(x.rows());
+    const auto dim = static_cast<int>(x.cols());
     rows.resize(n);
     y.assign(targets.begin(), targets.end());
     for (std::size_t i = 0; i < n; ++i) {
-      svm_node* row = &nodes[i * (Dim + 1)];
-      for (int f = 0; f < Dim; ++f) row[f] = svm_node{f + 1, x(static_cast<Eigen::Index>(i), f)};
-      row[Dim] = svm_node{-1, 0.0};
+      svm_node* row = &nodes[i * static_cast<std::size_t>(dim + 1)];
+      for (int f = 0; f < dim; ++f) row[f] = svm_node{f + 1, x(static_cast<Eigen::Index>(i), f)};
+      row[dim] = svm_node{-1, 0.0};
       rows[i] = row;
     }
     prob.l = static_cast<int>(n);
@@ -100,21 +104,32 @@ inline ModelPtr run_libsvm(const svm_problem& prob, const svm_parameter& param, 
 }
 
 template <int Dim>
-Eigen::Matrix<double, 1, Dim> sv_row(const svm_node* node) {
-  Eigen::Matrix<double, 1, Dim> row = Eigen::Matrix<double, 1, Dim>::Zero();
+Eigen::Matrix<double, 1, Dim> sv_row(const svm_node* node, int dim) {
+  Eigen::Matrix<double, 1, Dim> row = Eigen::Matrix<double, 1, Dim>::Zero(dim);
   for (; node->index != -1; ++node) {
-    if (node->index < 1 || node->index > Dim) throw std::invalid_argument("libsvm model: feature index " + std::to_string(node->index) + " outside [1, " + std::to_string(Dim) + "]");
+    if (node->index < 1 || node->index > dim) throw std::invalid_argument("libsvm model: feature index " + std::to_string(node->index) + " outside [1, " + std::to_string(dim) + "]");
     row[node->index - 1] = node->value;
   }
   return row;
+}
+
+/// Largest feature index of a libsvm model's support vectors (at least 1).
+inline int largest_index(const svm_model& lm) {
+  int largest = 1;
+  for (int s = 0; s < lm.l; ++s)
+    for (const svm_node* node = lm.SV[s]; node->index != -1; ++node) largest = std::max(largest, node->index);
+  return largest;
 }
 
 }  // namespace svm_train_detail
 
 /// Converts a trained (or svm_load_model-ed) libsvm C-SVC model with a linear or RBF kernel.
 /// The standardisation is identity; the caller may set it afterwards and re-finalise.
+/// dimension: Dim; for Eigen::Dynamic 0 (the largest feature index) or the caller's.
 template <int Dim, int MaxClasses = 8>
-SvmModel<Dim, MaxClasses> svm_model_from_libsvm(const svm_model& lm) {
+SvmModel<Dim, MaxClasses> svm_model_from_libsvm(const svm_model& lm, int dimension = Dim == Eigen::Dynamic ? 0 : Dim) {
+  if (Dim != Eigen::Dynamic && dimension != Dim) throw std::invalid_argument("libsvm model: dimension differs from the model type's");
+  const int dim = dimension > 0 ? dimension : svm_train_detail::largest_index(lm);
   if (lm.param.svm_type != C_SVC) throw std::invalid_argument("libsvm model: only C-SVC is supported");
   if (lm.param.kernel_type != LINEAR && lm.param.kernel_type != RBF)
     throw std::invalid_argument("libsvm model: only linear and RBF kernels are supported");
@@ -123,7 +138,9 @@ SvmModel<Dim, MaxClasses> svm_model_from_libsvm(const svm_model& lm) {
   SvmModel<Dim, MaxClasses> m;
   m.kernel = lm.param.kernel_type == LINEAR ? SvmKernel::linear : SvmKernel::rbf;
   m.multiclass = SvmMulticlass::one_vs_one;
-  m.gamma = m.kernel == SvmKernel::rbf ? lm.param.gamma : 1.0 / Dim;
+  m.gamma = m.kernel == SvmKernel::rbf ? lm.param.gamma : 1.0 / dim;
+  m.input_mean.setZero(dim);
+  m.input_std.setOnes(dim);
   m.num_classes = k;
   for (int i = 0; i < k; ++i) m.labels[static_cast<std::size_t>(i)] = lm.label[i];
   const int machines = svm_machine_count(SvmMulticlass::one_vs_one, k);
@@ -135,8 +152,8 @@ SvmModel<Dim, MaxClasses> svm_model_from_libsvm(const svm_model& lm) {
       m.prob_b[static_cast<std::size_t>(p)] = lm.probB[p];
     }
   const Eigen::Index l = lm.l;
-  m.support_vectors.resize(l, Dim);
-  for (Eigen::Index s = 0; s < l; ++s) m.support_vectors.row(s) = svm_train_detail::sv_row<Dim>(lm.SV[s]);
+  m.support_vectors.resize(l, dim);
+  for (Eigen::Index s = 0; s < l; ++s) m.support_vectors.row(s) = svm_train_detail::sv_row<Dim>(lm.SV[s], dim);
   m.coefficients.setZero(machines, l);
   std::vector<Eigen::Index> start(static_cast<std::size_t>(k), 0);
   for (int c = 1; c < k; ++c) start[static_cast<std::size_t>(c)] = start[static_cast<std::size_t>(c - 1)] + lm.nSV[c - 1];
@@ -162,7 +179,7 @@ std::pair<Eigen::Matrix<double, Dim, 1>, Eigen::Matrix<double, Dim, 1>> fit_stan
   Eigen::Matrix<double, Dim, 1> mean = x.colwise().mean().transpose();
   Eigen::Matrix<double, Dim, 1> std_dev =
       ((x.rowwise() - mean.transpose()).array().square().colwise().sum() / static_cast<double>(x.rows())).sqrt().transpose();
-  for (int f = 0; f < Dim; ++f)
+  for (Eigen::Index f = 0; f < x.cols(); ++f)
     if (!(std_dev[f] > 1e-300)) std_dev[f] = 1.0;
   return {mean, std_dev};
 }
@@ -176,13 +193,16 @@ SvmModel<Dim, MaxClasses> train_svm(const SvmFeatures<Dim>& x, std::span<const i
     throw std::invalid_argument("train_svm: " + std::to_string(x.rows()) + " feature rows but " + std::to_string(y.size()) + " labels");
   if (!x.allFinite()) throw std::invalid_argument("train_svm: features contain NaN or Inf");
   if (!(std::isfinite(options.C) && options.C > 0)) throw std::invalid_argument("train_svm: C must be finite and > 0");
-  const double gamma = options.gamma > 0 ? options.gamma : 1.0 / Dim;
+  if (x.cols() < 1) throw std::invalid_argument("train_svm: no features");
+  const auto dim = static_cast<int>(x.cols());
+  const double gamma = options.gamma > 0 ? options.gamma : 1.0 / dim;
   if (!std::isfinite(gamma)) throw std::invalid_argument("train_svm: gamma must be finite");
   const auto classes = labels_in_order(y);
   if (classes.size() < 2 || classes.size() > static_cast<std::size_t>(MaxClasses))
     throw std::invalid_argument("train_svm: " + std::to_string(classes.size()) + " classes; need 2 to " + std::to_string(MaxClasses));
 
-  Eigen::Matrix<double, Dim, 1> mean = Eigen::Matrix<double, Dim, 1>::Zero(), std_dev = Eigen::Matrix<double, Dim, 1>::Ones();
+  Eigen::Matrix<double, Dim, 1> mean = Eigen::Matrix<double, Dim, 1>::Zero(dim);
+  Eigen::Matrix<double, Dim, 1> std_dev = Eigen::Matrix<double, Dim, 1>::Ones(dim);
   if (options.standardize) std::tie(mean, std_dev) = fit_standardization<Dim>(x);
   const SvmFeatures<Dim> xs = ((x.rowwise() - mean.transpose()).array().rowwise() / std_dev.transpose().array()).matrix();
 
@@ -200,7 +220,7 @@ SvmModel<Dim, MaxClasses> train_svm(const SvmFeatures<Dim>& x, std::span<const i
     Problem<Dim> problem(xs, targets);
     const auto param = make_parameter(options, gamma, weight_labels, weights);
     const ModelPtr lm = run_libsvm(problem.prob, param, options.seed);
-    model = svm_model_from_libsvm<Dim, MaxClasses>(*lm);
+    model = svm_model_from_libsvm<Dim, MaxClasses>(*lm, dim);
   } else {
     // Machine m: class m (+1) against all others (-1); oriented so that f_m > 0 means class m.
     const int k = static_cast<int>(classes.size());
@@ -240,7 +260,7 @@ SvmModel<Dim, MaxClasses> train_svm(const SvmFeatures<Dim>& x, std::span<const i
       }
     }
     const auto l = static_cast<Eigen::Index>(column_of_sample.size());
-    model.support_vectors.resize(l, Dim);
+    model.support_vectors.resize(l, dim);
     for (const auto& [sample, col] : column_of_sample) model.support_vectors.row(col) = xs.row(sample);
     model.coefficients.setZero(k, l);
     for (int m = 0; m < k; ++m)

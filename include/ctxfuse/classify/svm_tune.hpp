@@ -30,7 +30,7 @@ std::pair<SvmFeatures<Dim>, std::vector<int>> select_rows(const SvmFeatures<Dim>
   std::vector<Eigen::Index> rows;
   for (std::size_t i = 0; i < group.size(); ++i)
     if ((group[i] == wanted) == equal) rows.push_back(static_cast<Eigen::Index>(i));
-  SvmFeatures<Dim> out(static_cast<Eigen::Index>(rows.size()), Dim);
+  SvmFeatures<Dim> out(static_cast<Eigen::Index>(rows.size()), x.cols());
   std::vector<int> labels(rows.size());
   for (std::size_t r = 0; r < rows.size(); ++r) {
     out.row(static_cast<Eigen::Index>(r)) = x.row(rows[r]);
@@ -119,7 +119,7 @@ SvmTuneResult tune_svm_pso(const SvmFeatures<Dim>& x, std::span<const int> y, Sv
   std::vector<int> ys(y.begin(), y.end()), folds = tune.fold_of_sample;
   if (step > 1) {
     const std::size_t m = (n + step - 1) / step;
-    xs.resize(static_cast<Eigen::Index>(m), Dim);
+    xs.resize(static_cast<Eigen::Index>(m), x.cols());
     ys.resize(m);
     if (!folds.empty()) folds.resize(m);
     for (std::size_t k = 0; k < m; ++k) {

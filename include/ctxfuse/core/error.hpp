@@ -37,6 +37,19 @@ struct SettingCheck {
 
 namespace ctxfuse::detail {
 
+/// Throws `error` (an exception type with what()); compiled with -fno-exceptions, prints its
+/// message to stderr and aborts. The throwing forms of the readers end here; each has a
+/// non-throwing form that returns its problem instead.
+template <class Error>
+[[noreturn]] void raise(const Error& error) {
+#if defined(__cpp_exceptions) || defined(__EXCEPTIONS)
+  throw error;
+#else
+  std::fprintf(stderr, "ctxfuse: %s\n", error.what());
+  std::abort();
+#endif
+}
+
 [[noreturn]] inline void invalid_setting(const std::string& what) {
 #if defined(__cpp_exceptions) || defined(__EXCEPTIONS)
   throw std::invalid_argument(what);
@@ -44,6 +57,12 @@ namespace ctxfuse::detail {
   std::fprintf(stderr, "ctxfuse: invalid setting: %s\n", what.c_str());
   std::abort();
 #endif
+}
+
+/// A settings struct's verdict where its user is constructed or run: nothing when `check`
+/// accepts, else invalid_setting("<who>: <the setting named by check>").
+inline void require_setting(const SettingCheck& check, std::string_view who) {
+  if (!check) invalid_setting(std::string(who).append(": ").append(check.what));
 }
 
 }  // namespace ctxfuse::detail

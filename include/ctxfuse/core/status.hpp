@@ -69,6 +69,7 @@ enum class Problem : std::uint8_t {
   input_out_of_domain,    // an input (e.g. a speed or a travelled distance) outside its range
   non_finite_features,    // a classifier's feature vector holds NaN or Inf
   feature_magnitude,      // a feature above 1e150 in magnitude (an RBF kernel would overflow)
+  features_wrong_size,    // a run-time sized feature vector whose length is not the model's dimension
   invalid_mass,           // belief masses not finite, negative, or not summing to one
   total_conflict,         // the evidence sources contradict each other completely (K = 0)
   zero_likelihood,        // no hidden state can have produced the observation
@@ -123,6 +124,7 @@ constexpr std::string_view describe(Problem p) {
     case Problem::input_out_of_domain: return "input outside its range (e.g. a negative speed or distance)";
     case Problem::non_finite_features: return "feature vector contains NaN or Inf";
     case Problem::feature_magnitude: return "feature magnitude above 1e150 (the kernel would overflow)";
+    case Problem::features_wrong_size: return "feature vector length differs from the model's dimension";
     case Problem::invalid_mass: return "belief masses not finite, negative or not summing to one";
     case Problem::total_conflict: return "evidence sources contradict each other completely";
     case Problem::zero_likelihood: return "no hidden state can have produced the observation";

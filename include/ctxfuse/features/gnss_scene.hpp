@@ -143,7 +143,7 @@ class GnssSceneExtractor {
 
  public:
   explicit GnssSceneExtractor(GnssSceneConfig config = {}) : config_(config) {
-    if (const SettingCheck c = config_.check(); !c) ctxfuse::detail::invalid_setting("GnssSceneExtractor: " + std::string(c.what));
+    ctxfuse::detail::require_setting(config_.check(), "GnssSceneExtractor");
   }
 
   void reset() {

@@ -90,19 +90,20 @@ class FederatedFilter {
 
   /// What the constructor would refuse (invalid_setting): a share not > 0, or shares whose sum
   /// is not 1 (within 1e-9).
-  static Problem check_shares(const std::array<double, L>& beta) {
+  static SettingCheck check_shares(const std::array<double, L>& beta) {
+    constexpr SettingCheck refused = SettingCheck::refuse("the shares beta_i must be > 0 and sum to 1");
     double s = 0.0;
     for (double b : beta) {
-      if (!(b > 0.0)) return Problem::invalid_setting;
+      if (!(b > 0.0)) return refused;
       s += b;
     }
-    return std::abs(s - 1.0) <= 1e-9 ? Problem::none : Problem::invalid_setting;
+    return std::abs(s - 1.0) <= 1e-9 ? SettingCheck{} : refused;
   }
 
   FederatedFilter(Model model, const Belief& initial, const std::array<double, L>& beta, FilterOptions options = {},
                   Gate gate = {})
       : model_(std::move(model)), beta_(beta), options_(options), gate_(std::move(gate)) {
-    if (check_shares(beta) != Problem::none) {
+    if (!check_shares(beta)) {
       std::string shares;
       for (double b : beta) shares += (shares.empty() ? "" : ", ") + std::to_string(b);
       ctxfuse::detail::invalid_setting("FederatedFilter: the shares beta_i must be > 0 and sum to 1, got " + shares);

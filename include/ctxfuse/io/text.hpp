@@ -27,6 +27,8 @@
 #include <utility>
 #include <vector>
 
+#include "ctxfuse/core/error.hpp"
+
 namespace ctxfuse::io {
 
 /// A reader's complaint about its input. line 0: the file as a whole (cannot open, missing
@@ -245,7 +247,7 @@ class Header {
 class TextFile {
  public:
   explicit TextFile(const std::filesystem::path& path) : name_(path.string()), file_(path, std::ios::binary) {
-    if (!file_) throw ParseError(name_, 0, 0, "", "cannot open file");
+    if (!file_) ctxfuse::detail::raise(ParseError(name_, 0, 0, "", "cannot open file"));
   }
   /// The lines of a stream the caller has opened (text in memory, a block of a larger file),
   /// called `name` in errors and counted from 1. The stream must outlive this reader.
@@ -266,7 +268,7 @@ class TextFile {
   std::size_t line_number() const { return line_number_; }
   const std::string& name() const { return name_; }
 
-  [[noreturn]] void fail(std::string reason) const { throw ParseError(name_, line_number_, 0, "", std::move(reason)); }
+  [[noreturn]] void fail(std::string reason) const { ctxfuse::detail::raise(ParseError(name_, line_number_, 0, "", std::move(reason))); }
 
  private:
   std::string name_;
@@ -343,9 +345,9 @@ class Fields {
 
   /// Throws naming field i (0-based here, 1-based in the message) and its header name.
   [[noreturn]] void fail(std::size_t i, std::string reason) const {
-    throw ParseError(file_, line_, i + 1, header_ ? header_->name_or_empty(i) : std::string(), std::move(reason));
+    ctxfuse::detail::raise(ParseError(file_, line_, i + 1, header_ ? header_->name_or_empty(i) : std::string(), std::move(reason)));
   }
-  [[noreturn]] void fail_line(std::string reason) const { throw ParseError(file_, line_, 0, "", std::move(reason)); }
+  [[noreturn]] void fail_line(std::string reason) const { ctxfuse::detail::raise(ParseError(file_, line_, 0, "", std::move(reason))); }
 
  private:
   std::string_view field(std::size_t i) const {

@@ -92,7 +92,7 @@ class DynamicAligner {
   DynamicAligner() = default;
   /// Options that o.check() refuses are a setting error (core/error.hpp).
   explicit DynamicAligner(const AlignmentOptions& o) : o_(o) {
-    if (const SettingCheck c = o.check(); !c) ctxfuse::detail::invalid_setting("DynamicAligner: " + std::string(c.what));
+    ctxfuse::detail::require_setting(o.check(), "DynamicAligner");
   }
 
   /// Forgets every fix offered (a restart aligns afresh).

@@ -51,9 +51,11 @@ inline const char* invalid_option(const SnapshotIntegrityOptions& o) {
   return nullptr;
 }
 
-/// invalid_setting when an option is out of range (what SnapshotIntegrity's constructor refuses).
-inline Problem check_options(const SnapshotIntegrityOptions& o) {
-  return invalid_option(o) ? Problem::invalid_setting : Problem::none;
+/// Problem::invalid_setting naming the option out of range (what SnapshotIntegrity's
+/// constructor refuses), or accepted.
+inline SettingCheck check_options(const SnapshotIntegrityOptions& o) {
+  const char* what = invalid_option(o);
+  return what ? SettingCheck::refuse(what) : SettingCheck{};
 }
 
 namespace detail {

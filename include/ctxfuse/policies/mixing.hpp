@@ -17,22 +17,24 @@
 namespace ctxfuse::policies {
 
 // Each constructor below that can be given a bad setting has a check function beside it that
-// returns a Problem instead of throwing (core/error.hpp): for code built without exceptions, or
-// that must not stop on a configuration error.
+// returns a SettingCheck (core/error.hpp: the Problem and the setting in words) instead of
+// throwing: for code built without exceptions, or that must not stop on a configuration error.
 
-/// transition_matrix_not_stochastic unless every entry is finite and >= 0 and every row sums
-/// to 1 (within 1e-9).
+/// Problem::transition_matrix_not_stochastic unless every entry is finite and >= 0 and every
+/// row sums to 1 (within 1e-9).
 template <int R>
-Problem check_transition(const SquareMatrix<R>& P) {
+SettingCheck check_transition(const SquareMatrix<R>& P) {
+  constexpr SettingCheck entry{Problem::transition_matrix_not_stochastic, "transition matrix: an entry is negative or not finite"};
+  constexpr SettingCheck row{Problem::transition_matrix_not_stochastic, "transition matrix: a row does not sum to 1"};
   for (int i = 0; i < R; ++i) {
     double s = 0.0;
     for (int j = 0; j < R; ++j) {
-      if (!std::isfinite(P(i, j)) || P(i, j) < 0.0) return Problem::transition_matrix_not_stochastic;
+      if (!std::isfinite(P(i, j)) || P(i, j) < 0.0) return entry;
       s += P(i, j);
     }
-    if (std::abs(s - 1.0) > 1e-9) return Problem::transition_matrix_not_stochastic;
+    if (std::abs(s - 1.0) > 1e-9) return row;
   }
-  return Problem::none;
+  return {};
 }
 
 namespace detail {
@@ -64,13 +66,15 @@ struct FixedTransition {
   void observe_region(int) {}  // a fixed matrix ignores the recognised region
 };
 
-/// invalid_setting unless 0 <= stay <= 1.
-inline Problem check_sticky(double stay) { return stay >= 0.0 && stay <= 1.0 ? Problem::none : Problem::invalid_setting; }
+/// Problem::invalid_setting unless 0 <= stay <= 1.
+inline SettingCheck check_sticky(double stay) {
+  return stay >= 0.0 && stay <= 1.0 ? SettingCheck{} : SettingCheck::refuse("stay must be within [0, 1]");
+}
 
 /// Diagonal-dominant matrix: stay with probability `stay`, the rest spread evenly.
 template <int R>
 SquareMatrix<R> sticky_transition(double stay) {
-  if (check_sticky(stay) != Problem::none) ctxfuse::detail::invalid_setting("sticky_transition: stay must be within [0, 1]");
+  ctxfuse::detail::require_setting(check_sticky(stay), "sticky_transition");
   SquareMatrix<R> P = SquareMatrix<R>::Constant(R > 1 ? (1.0 - stay) / (R - 1) : 0.0);
   P.diagonal().setConstant(R > 1 ? stay : 1.0);
   return P;
@@ -90,15 +94,16 @@ class RegionAdaptiveTransition {
 
   /// What the constructor would refuse: a prior that is not row-stochastic
   /// (transition_matrix_not_stochastic), weights not >= 0 or not summing to 1 (invalid_setting).
-  static Problem check(const SquareMatrix<R>& prior, double w_p, double w_m) {
-    if (Problem p = check_transition<R>(prior); p != Problem::none) return p;
-    if (!(w_p >= 0.0 && w_m >= 0.0 && std::abs(w_p + w_m - 1.0) <= 1e-12)) return Problem::invalid_setting;
-    return Problem::none;
+  static SettingCheck check(const SquareMatrix<R>& prior, double w_p, double w_m) {
+    if (const SettingCheck c = check_transition<R>(prior); !c) return c;
+    if (!(w_p >= 0.0 && w_m >= 0.0 && std::abs(w_p + w_m - 1.0) <= 1e-12))
+      return SettingCheck::refuse("weights: need w_p >= 0, w_m >= 0 and w_p + w_m = 1");
+    return {};
   }
 
   RegionAdaptiveTransition(const SquareMatrix<R>& prior, double w_p, double w_m) : prior_(prior), w_p_(w_p), w_m_(w_m) {
     detail::require_row_stochastic<R>(prior_, "RegionAdaptiveTransition prior");
-    if (check(prior, w_p, w_m) != Problem::none)
+    if (!check(prior, w_p, w_m))
       ctxfuse::detail::invalid_setting("RegionAdaptiveTransition: need w_p >= 0, w_m >= 0 and w_p + w_m = 1 (got " +
                                        std::to_string(w_p) + ", " + std::to_string(w_m) + ")");
     counts_.setZero();
@@ -166,11 +171,13 @@ class RegionAdaptiveTransition {
 template <int R, class Base>
 class PosteriorPull {
  public:
-  /// invalid_setting unless 0 <= lambda <= 1.
-  static Problem check(double lambda) { return lambda >= 0.0 && lambda <= 1.0 ? Problem::none : Problem::invalid_setting; }
+  /// Problem::invalid_setting unless 0 <= lambda <= 1.
+  static SettingCheck check(double lambda) {
+    return lambda >= 0.0 && lambda <= 1.0 ? SettingCheck{} : SettingCheck::refuse("lambda must be within [0, 1]");
+  }
 
   PosteriorPull(Base base, double lambda) : base_(std::move(base)), lambda_(lambda) {
-    if (check(lambda) != Problem::none) ctxfuse::detail::invalid_setting("PosteriorPull: lambda must be within [0, 1]");
+    ctxfuse::detail::require_setting(check(lambda), "PosteriorPull");
     posterior_.setConstant(1.0 / R);
   }
 

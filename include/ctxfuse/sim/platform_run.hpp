@@ -163,7 +163,7 @@ struct HeldDevice {
 
 /// Simulates the run. Throws std::invalid_argument for a configuration outside its range.
 inline PlatformRun simulate_platform_run(const PlatformRunConfig& c) {
-  if (const SettingCheck check = c.check(); !check) throw std::invalid_argument("sim platform run: " + std::string(check.what));
+  ctxfuse::detail::require_setting(c.check(), "sim platform run");
   const Route route = detail::platform_route(c.kind, c.rest_s, c.duration_s);
   PlatformRun run;
   run.config = c;

@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "ctxfuse/core/error.hpp"
 #include "ctxfuse/classify/confusion_matrix.hpp"
 #include "ctxfuse/studies/hanyang_protocol.hpp"
 #include "ctxfuse/io/hanyang_uwb.hpp"
@@ -102,7 +103,8 @@ void append_svm_rows(const std::filesystem::path& case_dir, const pipelines::nlo
   namespace nu = pipelines::nlos_uwb;
   const auto ranges = io::read_hanyang_uwb(case_dir).uwb_ranges();
   const auto ref = io::read_hanyang_reference(case_dir);
-  const nu::Track track = nu::run(std::span<const messages::UwbRange>(ranges), nu::RangeEkf<>(s), nu::NoNlosHandling{}, nu::NlosClassifier(s), s);
+  const nu::Track track = nu::run(std::span<const messages::UwbRange>(ranges), nu::RangeEkf<>(s),
+                                  nu::NlosPolicyChoice{nu::NlosHandling::none}, nu::NlosClassifier(s), s);
   for (const auto& rec : track.ranges) {
     const int y = residual_label(rec.range, ref, s);
     if (y < 0 || !rec.input.finite()) continue;
@@ -195,7 +197,7 @@ namespace detail {
 
 /// run_nlos_uwb_variant's body, a template only so that the compiled target ctxfuse::instances
 /// can hold its one instance (void; instances/nlos_uwb.hpp): it instantiates every estimator
-/// and policy of the variants.
+/// of the variants (the policy is a run-time NlosPolicyChoice).
 template <class = void>
 pipelines::nlos_uwb::Track run_nlos_uwb_variant(std::size_t index, std::span<const messages::UwbRange> rs,
                                                 const pipelines::nlos_uwb::NlosClassifier& classifier,
@@ -204,24 +206,27 @@ pipelines::nlos_uwb::Track run_nlos_uwb_variant(std::size_t index, std::span<con
   using Calibrated = nu::CalibratedRangeEkf<policies::ChiSquareGate, false, nu::NlosClassifier::kMaxAnchors>;
   using CalibratedLag = nu::CalibratedRangeEkf<policies::ChiSquareGate, true, nu::NlosClassifier::kMaxAnchors>;
   using Lagged = nu::RangeSmoother<10, policies::ChiSquareGate, 9>;
+  // The policy is a run-time choice: one run loop per estimator, not per estimator and policy.
+  constexpr nu::NlosPolicyChoice paper{nu::NlosHandling::paper_epoch_rule}, per_range{nu::NlosHandling::per_range},
+      every{nu::NlosHandling::none};
   switch (index) {
-    case 0: return nu::run(rs, nu::RangeEkf<>(s), nu::PaperEpochRule{}, classifier, s);
-    case 1: return nu::run(rs, nu::RangeEkf<>(s), nu::PerRangeRule{}, classifier, s);
-    case 2: return nu::run(rs, nu::RangeEkf<>(s), nu::NoNlosHandling{}, classifier, s);
-    case 3: return nu::run(rs, Calibrated(s), nu::PaperEpochRule{}, classifier, s);
-    case 4: return nu::run(rs, Calibrated(s), nu::PerRangeRule{}, classifier, s);
-    case 5: return nu::run(rs, Calibrated(s), nu::NoNlosHandling{}, classifier, s);
-    case 6: return nu::run(rs, CalibratedLag(s), nu::PaperEpochRule{}, classifier, s);
-    case 7: return nu::run(rs, CalibratedLag(s), nu::PerRangeRule{}, classifier, s);
-    case 8: return nu::run(rs, CalibratedLag(s), nu::NoNlosHandling{}, classifier, s);
-    case 9: return nu::run(rs, nu::RangeSmoother<>(s), nu::PaperEpochRule{}, classifier, s);
-    case 10: return nu::run(rs, nu::RangeSmoother<>(s), nu::NoNlosHandling{}, classifier, s);
-    case 11: return nu::run(rs, Lagged(s), nu::NoNlosHandling{}, classifier, s);
-    case 12: return nu::run(rs, Lagged(s), nu::PaperEpochRule{}, classifier, s);
-    case 13: return nu::run(rs, nu::RangeEkf<policies::NoGate>(s), nu::PaperEpochRule{}, classifier, s);
-    case 14: return nu::run(rs, nu::RangeEkf<policies::NoGate>(s), nu::NoNlosHandling{}, classifier, s);
+    case 0: return nu::run(rs, nu::RangeEkf<>(s), paper, classifier, s);
+    case 1: return nu::run(rs, nu::RangeEkf<>(s), per_range, classifier, s);
+    case 2: return nu::run(rs, nu::RangeEkf<>(s), every, classifier, s);
+    case 3: return nu::run(rs, Calibrated(s), paper, classifier, s);
+    case 4: return nu::run(rs, Calibrated(s), per_range, classifier, s);
+    case 5: return nu::run(rs, Calibrated(s), every, classifier, s);
+    case 6: return nu::run(rs, CalibratedLag(s), paper, classifier, s);
+    case 7: return nu::run(rs, CalibratedLag(s), per_range, classifier, s);
+    case 8: return nu::run(rs, CalibratedLag(s), every, classifier, s);
+    case 9: return nu::run(rs, nu::RangeSmoother<>(s), paper, classifier, s);
+    case 10: return nu::run(rs, nu::RangeSmoother<>(s), every, classifier, s);
+    case 11: return nu::run(rs, Lagged(s), every, classifier, s);
+    case 12: return nu::run(rs, Lagged(s), paper, classifier, s);
+    case 13: return nu::run(rs, nu::RangeEkf<policies::NoGate>(s), paper, classifier, s);
+    case 14: return nu::run(rs, nu::RangeEkf<policies::NoGate>(s), every, classifier, s);
     case 15: return nu::least_squares_track(rs, s);
-    case 16: return nu::run(rs, nu::MotionModelOnly(s), nu::NoNlosHandling{}, classifier, s);
+    case 16: return nu::run(rs, nu::MotionModelOnly(s), every, classifier, s);
     default: throw std::invalid_argument("no variant " + std::to_string(index));
   }
 }
@@ -244,7 +249,7 @@ std::vector<NlosUwbVariant> run_nlos_uwb_variants(std::span<const messages::UwbR
                                                   const pipelines::nlos_uwb::NlosClassifier& classifier,
                                                   const pipelines::nlos_uwb::Settings& s,
                                                   std::span<const std::string_view> names = {}) {
-  if (const SettingCheck c = s.check(); !c) throw std::invalid_argument("settings: " + std::string(c.what));
+  ctxfuse::detail::require_setting(s.check(), "settings");
   std::vector<NlosUwbVariant> out;
   auto add = [&](std::size_t i) { out.push_back({std::string(kNlosUwbVariants[i]), run_nlos_uwb_variant(i, rs, classifier, s), {}}); };
   if (names.empty())
@@ -273,7 +278,7 @@ NlosUwbCaseReport evaluate_nlos_uwb_case(const std::filesystem::path& case_dir,
                                          const pipelines::nlos_uwb::Settings& s, const HanyangSpan& span) {
   namespace nu = pipelines::nlos_uwb;
   namespace fs = std::filesystem;
-  if (const SettingCheck c = s.check(); !c) throw std::invalid_argument("settings: " + std::string(c.what));
+  ctxfuse::detail::require_setting(s.check(), "settings");
   NlosUwbCaseReport rep;
   for (const auto& c : training_cases)
     if (fs::weakly_canonical(c) == fs::weakly_canonical(case_dir))

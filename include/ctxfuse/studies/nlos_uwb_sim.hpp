@@ -36,6 +36,7 @@
 #include <string_view>
 #include <vector>
 
+#include "ctxfuse/core/error.hpp"
 #include "ctxfuse/classify/confusion_matrix.hpp"
 #include "ctxfuse/studies/nlos_uwb.hpp"
 #include "ctxfuse/eval/position_error.hpp"
@@ -143,7 +144,8 @@ template <class = void>
 void append_sim_svm_rows(const sim::Drive& d, const pipelines::nlos_uwb::Settings& s, pipelines::nlos_uwb::LabelledSvmRows& rows) {
   namespace nu = pipelines::nlos_uwb;
   const LabelledRanges lr = labelled_ranges(d);
-  const nu::Track track = nu::run(std::span<const messages::UwbRange>(lr.ranges), nu::RangeEkf<>(s), nu::NoNlosHandling{}, nu::NlosClassifier(s), s);
+  const nu::Track track = nu::run(std::span<const messages::UwbRange>(lr.ranges), nu::RangeEkf<>(s),
+                                     nu::NlosPolicyChoice{nu::NlosHandling::none}, nu::NlosClassifier(s), s);
   if (track.ranges.size() != lr.ranges.size()) throw std::logic_error("append_sim_svm_rows: the run lost ranges");
   for (std::size_t i = 0; i < track.ranges.size(); ++i) {
     if (!track.ranges[i].input.finite()) continue;
@@ -231,7 +233,7 @@ template <class = void>
 NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::uint64_t seed, const NlosSimProtocol& protocol,
                                     const pipelines::nlos_uwb::Settings& s) {
   namespace nu = pipelines::nlos_uwb;
-  if (const SettingCheck c = s.check(); !c) throw std::invalid_argument("settings: " + std::string(c.what));
+  ctxfuse::detail::require_setting(s.check(), "settings");
   NlosSimReport rep;
   rep.seed = seed;
   nu::LabelledSvmRows rows;
@@ -274,29 +276,32 @@ NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::uint64_t 
     rep.variants.back().ranges_gated = t.ranges_gated;
   };
 
+  // The policy is a run-time choice: one run loop per estimator, not per estimator and policy.
+  constexpr nu::NlosPolicyChoice paper{nu::NlosHandling::paper_epoch_rule}, per_range{nu::NlosHandling::per_range},
+      every{nu::NlosHandling::none};
   std::vector<double> times;
   for (const auto& e : ls.estimates) times.push_back(e.t);
   add(kNlosSimVariants[0], imu_only_track(d, rep.span_start, times), 0);
   add_run(kNlosSimVariants[1], ls);
   using Graph = nu::RangeSmoother<10, policies::NoGate>;
-  add_run(kNlosSimVariants[2], nu::run(rs, Graph(s), nu::NoNlosHandling{}, classifier, s));
-  add_run(kNlosSimVariants[3], nu::run(rs, Graph(s), nu::PaperEpochRule{}, classifier, s));
-  add_run(kNlosSimVariants[4], nu::run(rs, nu::RangeSmoother<>(s), nu::NoNlosHandling{}, classifier, s));
-  rep.proposed = nu::run(rs, nu::RangeSmoother<>(s), nu::PaperEpochRule{}, classifier, s);
+  add_run(kNlosSimVariants[2], nu::run(rs, Graph(s), every, classifier, s));
+  add_run(kNlosSimVariants[3], nu::run(rs, Graph(s), paper, classifier, s));
+  add_run(kNlosSimVariants[4], nu::run(rs, nu::RangeSmoother<>(s), every, classifier, s));
+  rep.proposed = nu::run(rs, nu::RangeSmoother<>(s), paper, classifier, s);
   add_run(kNlosSimVariants[5], rep.proposed);
-  add_run(kNlosSimVariants[6], nu::run(rs, nu::RangeSmoother<>(s), nu::PerRangeRule{}, classifier, s));
-  add_run(kNlosSimVariants[7], nu::run(rs, nu::RangeEkf<>(s), nu::PaperEpochRule{}, classifier, s));
-  add_run(kNlosSimVariants[8], nu::run(rs, nu::RangeEkf<>(s), nu::NoNlosHandling{}, classifier, s));
+  add_run(kNlosSimVariants[6], nu::run(rs, nu::RangeSmoother<>(s), per_range, classifier, s));
+  add_run(kNlosSimVariants[7], nu::run(rs, nu::RangeEkf<>(s), paper, classifier, s));
+  add_run(kNlosSimVariants[8], nu::run(rs, nu::RangeEkf<>(s), every, classifier, s));
   const std::vector<messages::ImuSample>& imu = d.imu;
   const nu::ImuFusionSettings sheet = imu_fusion_settings(d.config.imu);
   using ImuGraph = nu::ImuRangeSmoother<10, policies::NoGate>;
-  add_run(kNlosSimVariants[9], nu::run(std::span<const messages::ImuSample>(imu), rs, ImuGraph(s, sheet), nu::NoNlosHandling{}, classifier, s));
-  add_run(kNlosSimVariants[10], nu::run(std::span<const messages::ImuSample>(imu), rs, ImuGraph(s, sheet), nu::PaperEpochRule{}, classifier, s));
-  add_run(kNlosSimVariants[11], nu::run(std::span<const messages::ImuSample>(imu), rs, nu::ImuRangeSmoother<>(s, sheet), nu::PaperEpochRule{},
+  add_run(kNlosSimVariants[9], nu::run(std::span<const messages::ImuSample>(imu), rs, ImuGraph(s, sheet), every, classifier, s));
+  add_run(kNlosSimVariants[10], nu::run(std::span<const messages::ImuSample>(imu), rs, ImuGraph(s, sheet), paper, classifier, s));
+  add_run(kNlosSimVariants[11], nu::run(std::span<const messages::ImuSample>(imu), rs, nu::ImuRangeSmoother<>(s, sheet), paper,
                                         classifier, s));
   add_run(kNlosSimVariants[12],
-          nu::run(std::span<const messages::ImuSample>(imu), rs, nu::ImuRangeEkf<policies::NoGate>(s, sheet), nu::PaperEpochRule{}, classifier, s));
-  add_run(kNlosSimVariants[13], nu::run(std::span<const messages::ImuSample>(imu), rs, nu::ImuRangeEkf<>(s, sheet), nu::PaperEpochRule{}, classifier, s));
+          nu::run(std::span<const messages::ImuSample>(imu), rs, nu::ImuRangeEkf<policies::NoGate>(s, sheet), paper, classifier, s));
+  add_run(kNlosSimVariants[13], nu::run(std::span<const messages::ImuSample>(imu), rs, nu::ImuRangeEkf<>(s, sheet), paper, classifier, s));
   score_identification(rep.proposed, lr, rep.svm_vu_model, rep);
   return rep;
 }

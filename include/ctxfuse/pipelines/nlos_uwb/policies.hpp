@@ -14,10 +14,12 @@
 //   LOS and does not enter the minimum.
 // - PerRangeRule (the extension): leave out only the ranges judged NLOS.
 // - NoNlosHandling: every range (the "without NLOS handling" baseline).
+// - NlosPolicyChoice: one of the three, chosen at run time.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <span>
 
 #include "ctxfuse/classify/consistency.hpp"
@@ -64,6 +66,29 @@ struct PerRangeRule {
 struct NoNlosHandling {
   void select(std::span<const RangeVerdict> epoch, std::span<bool> attach) const {
     std::fill(attach.begin(), attach.begin() + static_cast<std::ptrdiff_t>(epoch.size()), true);
+  }
+};
+
+/// The three policies above as one run-time choice. A program that runs several of them (the
+/// studies of studies/nlos_uwb*.hpp run every variant) compiles the run loop once per estimator
+/// instead of once per estimator and policy; a policy is consulted once an epoch, so the
+/// switch costs nothing measurable there.
+enum class NlosHandling : std::uint8_t {
+  paper_epoch_rule,  // PaperEpochRule
+  per_range,         // PerRangeRule
+  none,              // NoNlosHandling
+};
+
+struct NlosPolicyChoice {
+  NlosHandling handling = NlosHandling::paper_epoch_rule;
+  PaperEpochRule paper{};  // the rule's settings, used by paper_epoch_rule
+
+  void select(std::span<const RangeVerdict> epoch, std::span<bool> attach) const {
+    switch (handling) {
+      case NlosHandling::paper_epoch_rule: paper.select(epoch, attach); return;
+      case NlosHandling::per_range: PerRangeRule{}.select(epoch, attach); return;
+      case NlosHandling::none: NoNlosHandling{}.select(epoch, attach); return;
+    }
   }
 };
 
