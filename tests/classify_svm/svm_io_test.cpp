@@ -101,6 +101,10 @@ std::vector<BadCase> bad_libsvm_cases() {
       {"unknown field", "label 1 -1", "lable 1 -1", 7, "lable"},
       {"one class", "nr_class 2", "nr_class 1", 4, "nr_class"},
       {"huge label", "label 1 -1", "label 1 1e12", 7, "label"},
+      // Bytes that a message must not carry raw (a NUL cut the exception's what() short).
+      {"NUL in a value", "1:-1 2:0.5", std::string("1:-1 2:0\0.5", 11), 14, "SV feature 2"},
+      {"control byte in a kernel name", "kernel_type rbf", "kernel_type r\x01" "bf", 2, "kernel_type"},
+      {"NUL in a field name", "probA -1.5", std::string("pro\0bA -1.5", 11), 8, "pro\\x00bA"},
   };
 }
 
@@ -122,6 +126,23 @@ TEST(SvmIo, MalformedLibsvmFilesNameLineAndField) {
       EXPECT_NE(std::string(e.what()).find(path.string() + ":" + std::to_string(c.line) + ": " + c.field), std::string::npos);
     }
     std::filesystem::remove(path);
+  }
+}
+
+TEST(SvmIo, MessagesEscapeUnprintableBytes) {
+  std::string text = kHandLibsvm;
+  text.replace(text.find("1:-1 2:0.5"), 10, std::string("1:-1 2:0\0.5", 11));
+  std::istringstream in(text);
+  SvmModel<2> model;
+  const auto problem = try_read_libsvm_model(in, "nul.model", model);
+  ASSERT_TRUE(problem.has_value());
+  EXPECT_EQ(problem->what(), "nul.model:14: SV feature 2: expected a finite number, got '0\\x00.5'");
+  std::istringstream again(text);
+  try {
+    (void)read_libsvm_model<2>(again, "nul.model");
+    ADD_FAILURE() << "no error";
+  } catch (const SvmFileError& e) {
+    EXPECT_EQ(std::string(e.what()), problem->what());
   }
 }
 

@@ -36,6 +36,23 @@ TEST(Split, WhitespaceRunsAreOneSeparator) {
   EXPECT_TRUE(split_fields(" \t ", Separator::whitespace).empty());
 }
 
+// A quoted field never carries a NUL, a control byte or a stray UTF-8 byte into a message:
+// a NUL would cut an exception's what() short of what the non-throwing form reports.
+TEST(Quote, EscapesEveryByteOutsidePrintableAscii) {
+  EXPECT_EQ(quote("a b~"), "'a b~'");
+  EXPECT_EQ(quote(""), "''");
+  EXPECT_EQ(quote(std::string("0\0.5", 4)), "'0\\x00.5'");
+  EXPECT_EQ(quote("\t\r\n\x1f\x7f"), "'\\x09\\x0d\\x0a\\x1f\\x7f'");
+  EXPECT_EQ(quote("\xc3\xa9"), "'\\xc3\\xa9'");
+  EXPECT_EQ(printable(std::string("a\0b", 3)), "a\\x00b");
+  for (int b = 0; b < 256; ++b) {
+    const std::string q = quote(std::string(1, static_cast<char>(b)));
+    const bool printable = b >= 0x20 && b < 0x7f;
+    EXPECT_EQ(q.size(), printable ? 3u : 6u) << b;
+    for (const char c : q) EXPECT_TRUE(c >= 0x20 && c < 0x7f) << b;
+  }
+}
+
 TEST(Numbers, RealAcceptsWholeFieldsOnly) {
   double v = 0.0;
   EXPECT_EQ(parse_real(" -12.5e1 ", v), NumberError::none);

@@ -58,7 +58,7 @@ class Reader {
 
   /// Records the problem (at the current line unless `at_line` is given); returns false.
   bool fail(std::string_view field, std::string message, int at_line = -1) {
-    if (!problem_) problem_ = SvmFileProblem{file_.name(), at_line < 0 ? line() : at_line, std::string(field), std::move(message)};
+    if (!problem_) problem_ = SvmFileProblem{file_.name(), at_line < 0 ? line() : at_line, io::printable(field), std::move(message)};
     return false;
   }
 
@@ -165,12 +165,12 @@ bool parse_libsvm(Reader& r, int dim, SvmModel<Dim, MaxClasses>& model) {
     }
     if (key == "svm_type") {
       if (t.size() != 2 || t[1] != "c_svc")
-        return r.fail(key, "only c_svc models are supported, got '" + (t.size() > 1 ? std::string(t[1]) : std::string()) + "'");
+        return r.fail(key, io::cat("only c_svc models are supported, got ", io::quote(t.size() > 1 ? t[1] : std::string_view())));
     } else if (key == "kernel_type") {
       if (t.size() != 2) return r.fail(key, "expected one value");
       if (t[1] == "linear") model.kernel = SvmKernel::linear;
       else if (t[1] == "rbf") model.kernel = SvmKernel::rbf;
-      else return r.fail(key, "only linear and rbf kernels are supported, got '" + std::string(t[1]) + "'");
+      else return r.fail(key, io::cat("only linear and rbf kernels are supported, got ", io::quote(t[1])));
       have_kernel = true;
     } else if (key == "gamma") {
       if (t.size() != 2) return r.fail(key, "expected one value");
@@ -250,7 +250,7 @@ bool parse_libsvm(Reader& r, int dim, SvmModel<Dim, MaxClasses>& model) {
     long long previous_index = 0;
     for (std::size_t i = static_cast<std::size_t>(k - 1); i < t.size(); ++i) {
       const auto colon = t[i].find(':');
-      if (colon == std::string_view::npos) return r.fail("SV feature", "expected index:value, got '" + std::string(t[i]) + "'");
+      if (colon == std::string_view::npos) return r.fail("SV feature", io::cat("expected index:value, got ", io::quote(t[i])));
       long long index = 0;
       if (!r.integer(t[i].substr(0, colon), "SV feature index", index)) return false;
       if (index <= previous_index) return r.fail("SV feature index", "indices must increase, got " + std::to_string(index));
@@ -312,7 +312,7 @@ bool parse_ctxfuse(Reader& r, int dim, SvmModel<Dim, MaxClasses>& model) {
       if (!r.next(line)) return r.fail(key, "file ends before this field", r.line() + 1);
     } while (io::split_fields(line, io::Separator::whitespace).empty());
     t = io::split_fields(line, io::Separator::whitespace);
-    if (t[0] != key) return r.fail(key, "expected field '" + std::string(key) + "', found '" + std::string(t[0]) + "'");
+    if (t[0] != key) return r.fail(key, io::cat("expected field '", key, "', found ", io::quote(t[0])));
     t.erase(t.begin());
     if (expected >= 0 && static_cast<long long>(t.size()) != expected)
       return r.fail(key, "expected " + std::to_string(expected) + " values, got " + std::to_string(t.size()));
@@ -331,12 +331,12 @@ bool parse_ctxfuse(Reader& r, int dim, SvmModel<Dim, MaxClasses>& model) {
   if (!field("kernel", 1)) return false;
   if (t[0] == "linear") model.kernel = SvmKernel::linear;
   else if (t[0] == "rbf") model.kernel = SvmKernel::rbf;
-  else return r.fail("kernel", "expected linear or rbf, got '" + std::string(t[0]) + "'");
+  else return r.fail("kernel", io::cat("expected linear or rbf, got ", io::quote(t[0])));
   if (!field("gamma", 1) || !r.real(t[0], "gamma", model.gamma)) return false;
   if (!field("multiclass", 1)) return false;
   if (t[0] == "ovo") model.multiclass = SvmMulticlass::one_vs_one;
   else if (t[0] == "ovr") model.multiclass = SvmMulticlass::one_vs_rest;
-  else return r.fail("multiclass", "expected ovo or ovr, got '" + std::string(t[0]) + "'");
+  else return r.fail("multiclass", io::cat("expected ovo or ovr, got ", io::quote(t[0])));
   if (!field("labels", -1) || !r.class_count<MaxClasses>(static_cast<long long>(t.size()), "labels")) return false;
   model.num_classes = static_cast<int>(t.size());
   for (std::size_t i = 0; i < t.size(); ++i)

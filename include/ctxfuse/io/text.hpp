@@ -93,8 +93,28 @@ std::string cat(const Parts&... parts) {
   return s;
 }
 
-/// 'text', for messages that quote a field.
-inline std::string quote(std::string_view s) { return cat('\'', s, '\''); }
+/// The text with every byte outside printable ASCII written as \xNN, for a message that shows
+/// what a file holds: a message never carries a NUL, a control character or a broken UTF-8
+/// sequence from a malformed file into a log (a NUL would also cut an exception's what()).
+inline std::string printable(std::string_view s) {
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string out;
+  out.reserve(s.size());
+  for (const char c : s) {
+    const auto b = static_cast<unsigned char>(c);
+    if (b >= 0x20 && b < 0x7f) {
+      out += c;
+    } else {
+      out += "\\x";
+      out += kHex[b >> 4];
+      out += kHex[b & 0xf];
+    }
+  }
+  return out;
+}
+
+/// 'text', printable, for messages that quote a field.
+inline std::string quote(std::string_view s) { return cat('\'', printable(s), '\''); }
 
 enum class Separator { comma, whitespace };
 

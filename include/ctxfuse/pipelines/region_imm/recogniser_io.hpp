@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "ctxfuse/classify/svm_io.hpp"
+#include "ctxfuse/io/text.hpp"
 #include "ctxfuse/pipelines/region_imm/recogniser.hpp"
 
 namespace ctxfuse::pipelines::region_imm {
@@ -100,14 +101,14 @@ Recogniser read_recogniser(std::istream& in, const std::string& file) {
     std::istringstream ss(line);
     std::string head;
     ss >> head;
-    if (head != key) throw RecogniserFileError(file, line_no, key, "expected record '" + std::string(key) + "', found '" + head + "'");
+    if (head != key) throw RecogniserFileError(file, line_no, key, io::cat("expected record '", key, "', found ", io::quote(head)));
     std::vector<double> v;
     std::string tok;
     while (ss >> tok) {
       double x = 0.0;
       const auto res = std::from_chars(tok.data(), tok.data() + tok.size(), x);
       if (res.ec != std::errc() || res.ptr != tok.data() + tok.size())
-        throw RecogniserFileError(file, line_no, key, "'" + tok + "' is not a number");
+        throw RecogniserFileError(file, line_no, key, io::cat(io::quote(tok), " is not a number"));
       v.push_back(x);
     }
     if (v.size() != n)
