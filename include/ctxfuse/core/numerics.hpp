@@ -295,4 +295,29 @@ inline double chi_square_quantile(double probability, int dof) {
   return 0.5 * (lo + hi);
 }
 
+namespace detail {
+/// Where a matrix stops being row-stochastic, row by row: the first entry negative or not
+/// finite (`col` >= 0), or the first row whose sum is off 1 by more than `tol` (`col` = -1,
+/// `sum` its sum); `row` = -1 when every entry is finite and >= 0 and every row sums to 1.
+/// The one test behind the IMM's per-cycle check and the mixing policies' settings checks.
+struct StochasticFault {
+  int row = -1;
+  int col = -1;
+  double sum = 0.0;
+};
+
+template <int R>
+StochasticFault first_stochastic_fault(const SquareMatrix<R>& P, double tol = 1e-9) {
+  for (int i = 0; i < R; ++i) {
+    double s = 0.0;
+    for (int j = 0; j < R; ++j) {
+      if (!std::isfinite(P(i, j)) || P(i, j) < 0.0) return {i, j, s};
+      s += P(i, j);
+    }
+    if (std::abs(s - 1.0) > tol) return {i, -1, s};
+  }
+  return {};
+}
+}  // namespace detail
+
 }  // namespace ctxfuse

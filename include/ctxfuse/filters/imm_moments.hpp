@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 
+#include "ctxfuse/core/numerics.hpp"
 #include "ctxfuse/core/types.hpp"
 
 namespace ctxfuse::imm::detail {
@@ -13,10 +14,7 @@ namespace ctxfuse::imm::detail {
 /// Entries finite and >= 0, every row summing to 1 within `tol`: a matrix mix() accepts.
 template <int R>
 bool row_stochastic(const SquareMatrix<R>& P, double tol) {
-  if (!P.allFinite() || (P.array() < 0.0).any()) return false;
-  for (int i = 0; i < R; ++i)
-    if (std::abs(P.row(i).sum() - 1.0) > tol) return false;
-  return true;
+  return ctxfuse::detail::first_stochastic_fault<R>(P, tol).row < 0;
 }
 
 /// mu_{i|j} = p_ij mu_i / c_j in column j (Bar-Shalom eq. 11.6.6-7). A mode that no mode can

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "ctxfuse/core/error.hpp"
+#include "ctxfuse/core/numerics.hpp"
 #include "ctxfuse/core/status.hpp"
 #include "ctxfuse/core/types.hpp"
 
@@ -24,34 +25,23 @@ namespace ctxfuse::policies {
 /// row sums to 1 (within 1e-9).
 template <int R>
 SettingCheck check_transition(const SquareMatrix<R>& P) {
-  constexpr SettingCheck entry{Problem::transition_matrix_not_stochastic, "transition matrix: an entry is negative or not finite"};
-  constexpr SettingCheck row{Problem::transition_matrix_not_stochastic, "transition matrix: a row does not sum to 1"};
-  for (int i = 0; i < R; ++i) {
-    double s = 0.0;
-    for (int j = 0; j < R; ++j) {
-      if (!std::isfinite(P(i, j)) || P(i, j) < 0.0) return entry;
-      s += P(i, j);
-    }
-    if (std::abs(s - 1.0) > 1e-9) return row;
-  }
-  return {};
+  const ctxfuse::detail::StochasticFault f = ctxfuse::detail::first_stochastic_fault<R>(P);
+  if (f.row < 0) return {};
+  if (f.col >= 0) return {Problem::transition_matrix_not_stochastic, "transition matrix: an entry is negative or not finite"};
+  return {Problem::transition_matrix_not_stochastic, "transition matrix: a row does not sum to 1"};
 }
 
 namespace detail {
+/// check_transition's verdict as invalid_setting, naming the entry or the row and its sum.
 template <int R>
 void require_row_stochastic(const SquareMatrix<R>& P, const char* who) {
-  for (int i = 0; i < R; ++i) {
-    double s = 0.0;
-    for (int j = 0; j < R; ++j) {
-      if (!std::isfinite(P(i, j)) || P(i, j) < 0.0)
-        ctxfuse::detail::invalid_setting(std::string(who) + ": entry (" + std::to_string(i) + ", " +
-                                         std::to_string(j) + ") is negative or not finite");
-      s += P(i, j);
-    }
-    if (std::abs(s - 1.0) > 1e-9)
-      ctxfuse::detail::invalid_setting(std::string(who) + ": row " + std::to_string(i) + " sums to " +
-                                       std::to_string(s) + ", not 1");
-  }
+  const ctxfuse::detail::StochasticFault f = ctxfuse::detail::first_stochastic_fault<R>(P);
+  if (f.row < 0) return;
+  if (f.col >= 0)
+    ctxfuse::detail::invalid_setting(std::string(who) + ": entry (" + std::to_string(f.row) + ", " +
+                                     std::to_string(f.col) + ") is negative or not finite");
+  ctxfuse::detail::invalid_setting(std::string(who) + ": row " + std::to_string(f.row) + " sums to " +
+                                   std::to_string(f.sum) + ", not 1");
 }
 }  // namespace detail
 
