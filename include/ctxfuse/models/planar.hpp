@@ -137,6 +137,14 @@ struct PlanarRange {
   double tag_height = 1.0;
   double sigma = 0.1;
 
+  template <class T>
+  Vector<1, T> value(const Vector<L::size, T>& x) const {
+    using std::sqrt;
+    const T dx = x(L::offset<"p">()) - T(anchor(0)), dy = x(L::offset<"p">() + 1) - T(anchor(1));
+    const double dz = tag_height - anchor(2);
+    return Vector<1, T>(sqrt(dx * dx + dy * dy + T(dz * dz)));
+  }
+
   Vector<1> predict(const Vector<L::size>& x, Matrix<1, L::size>* H) const {
     const Vector<2> d = L::get<"p">(x) - anchor.head<2>();
     const double dz = tag_height - anchor(2);

@@ -1,8 +1,11 @@
 // The NLOS-robust UWB smoother with IMU factors (the paper's graph): one window state per
 // epoch as in RangeSmoother (smoother.hpp), but the planar IMU state (models/planar.hpp:
 // position, velocity, heading, yaw-rate bias, forward/lateral accelerometer bias) and, between
-// consecutive states, the IMU factor of the samples in force over the interval
-// (models/planar_interval.hpp) instead of a constant-velocity motion factor.
+// consecutive states, the IMU factor of the samples in force over the interval instead of a
+// constant-velocity motion factor. The samples are preintegrated once, at the previous state's
+// biases (models/planar_preintegration.hpp), so a linearisation of the factor costs a few 2 x 2
+// products however many samples the interval holds; it equals the re-chained samples
+// (models/planar_interval.hpp) at those biases and is corrected to first order in the biases.
 //
 // The IMU stream reaches the estimator through add_imu (run.hpp's IMU overload of `run`), as
 // pieces (sample, start, span) that io::replay cuts at measurement times; an epoch's interval
@@ -23,6 +26,7 @@
 #include <cmath>
 #include <cstddef>
 #include <span>
+#include <type_traits>
 #include <utility>
 
 #include "ctxfuse/core/gaussian.hpp"
@@ -31,6 +35,7 @@
 #include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/models/planar.hpp"
 #include "ctxfuse/models/planar_interval.hpp"
+#include "ctxfuse/models/planar_preintegration.hpp"
 #include "ctxfuse/models/planar_start.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/estimators.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/smoother.hpp"
@@ -115,10 +120,21 @@ class ImuPieces {
   }
 
   /// The samples in force over [t0, t1] (a stretch without pieces is covered by the sample
-  /// before it, or after it at the start); false when no piece reaches the interval.
-  template <int C>
-  bool interval(double t0, double t1, models::PlanarImuInterval<C>& out) const {
-    out.clear();
+  /// before it, or after it at the start), handed in time order to out.add(sample, span): a
+  /// models::PlanarImuInterval (cleared first) or a models::PlanarPreintegrated (reset by the
+  /// caller at its biases). False when no piece reaches the interval or `out` refuses one.
+  template <class Sink>
+  bool interval(double t0, double t1, Sink& out) const {
+    if constexpr (requires { out.clear(); }) out.clear();
+    bool ok = true;
+    int added = 0;
+    auto put = [&](const models::PlanarImu& u, double span) {
+      ++added;
+      if constexpr (std::is_void_v<decltype(out.add(u, span))>)
+        out.add(u, span);
+      else
+        ok = ok && out.add(u, span) == Problem::none;
+    };
     constexpr double kMinSpan = 1e-9;  // replay's accumulated clock meets range stamps to ~1e-15 s
     double cursor = t0;
     const models::PlanarImu* held = nullptr;
@@ -130,16 +146,16 @@ class ImuPieces {
         continue;
       }
       if (p.t >= t1) break;
-      if (p.t > cursor + kMinSpan) out.add(held ? *held : p.u, p.t - cursor);
+      if (p.t > cursor + kMinSpan) put(held ? *held : p.u, p.t - cursor);
       cursor = std::max(cursor, p.t);
       const double stop = std::min(end, t1);
-      if (stop > cursor) out.add(p.u, stop - cursor);
+      if (stop > cursor) put(p.u, stop - cursor);
       cursor = stop;
       held = &p.u;
     }
     if (!held) return false;
-    if (cursor < t1 - kMinSpan) out.add(*held, t1 - cursor);
-    return out.count > 0;
+    if (cursor < t1 - kMinSpan) put(*held, t1 - cursor);
+    return ok && added > 0;
   }
 
   /// Forgets the pieces that end at or before t (kept: the one in force at t).
@@ -170,13 +186,12 @@ class ImuRangeSmoother {
 
  public:
   static constexpr int kSlots = 16;  // NlosClassifier::kMaxAnchors: one slot per anchor
-  static constexpr int kIntervalSamples = 32;
   using L = models::PlanarLayout;
-  using Motion = models::PlanarImuIntervalModel<kIntervalSamples>;
+  using Motion = models::PlanarPreintegratedModel;
   using Smoother = FixedLagSmoother<Motion, models::PlanarRange, K, kSlots>;
 
   ImuRangeSmoother(const Settings& s, const ImuFusionSettings& imu)
-      : settings_(s), smoother_(Motion{imu.model()}), gate_(make_gate<Gate>(s)),
+      : settings_(s), imu_model_(imu.model()), smoother_(Motion{}), gate_(make_gate<Gate>(s)),
         align_settings_(imu.start(s)), aligner_(align_settings_.alignment_options()) {}
 
   bool started() const { return started_; }
@@ -193,7 +208,7 @@ class ImuRangeSmoother {
 
   /// One piece of the IMU stream: sample `s` in force over [t, t + span).
   void add_imu(double t, double span, const messages::ImuSample& s) {
-    pieces_.add(t, span, models::planar_input(s), smoother_.motion().step);
+    pieces_.add(t, span, models::planar_input(s), imu_model_);
   }
 
   /// Offers the fix to the aligner; starts (accepted) at the fix that completes an alignment,
@@ -216,7 +231,12 @@ class ImuRangeSmoother {
   Status apply_epoch(std::span<const messages::UwbRange> epoch, std::span<const bool> attach, std::span<Status> statuses) {
     if (auto done = smoother_epoch_check(started_, fresh_, time(), kSlots, epoch, statuses)) return *done;
     const double t = epoch.back().t, dt = t - time();
+    // Preintegrated once, at the newest state's biases; the factor corrects them to first
+    // order as the window's solution moves them (models/planar_preintegration.hpp).
+    const Vector<L::size>& newest = smoother_.newest();
     typename Motion::Input u;
+    if (u.reset(imu_model_, newest(L::offset<"bg">()), L::get<"ba">(newest)) != Problem::none)
+      return Status::failure(Problem::non_finite_state);
     if (!pieces_.interval(time(), t, u)) return Status::invalid(Problem::non_finite_input);
     if (Problem p = smoother_.motion().check(u, dt); p != Problem::none) return Status::invalid(p);
     SquareMatrix<L::size> F;
@@ -234,6 +254,7 @@ class ImuRangeSmoother {
   const typename Smoother::Epoch& lagged() const { return lagged_epoch(smoother_, OutputLag); }
 
   Settings settings_;
+  models::PlanarImuModel imu_model_;  // the IMU's data sheet: the pieces' checks and the preintegration
   Smoother smoother_;
   Gate gate_;
   models::PlanarStartSettings align_settings_;  // what the aligner and the initial belief read
