@@ -113,31 +113,38 @@ inline const Snapshot& snapshot() {
   return s;
 }
 
-/// Times step 201 on copies of the snapshot's smoother, the copies made with the timer paused,
+/// Times `step(smoother)` on copies of `before`, the copies made with the timer paused,
 /// kCopies at a time, so that only steps are timed: a smoother holds two windows and two
-/// normal-equation systems (about 25 kB), and copying one before every step, which no user
+/// normal-equation systems (25 kB and more), and copying one before every step, which no user
 /// does, cost a fifth of a step. Each copy's step starts with its data in L2 rather than L1
-/// (16 copies, 400 kB), as a user's step does after other work. The pause (two clock reads)
-/// is paid once per 16 steps. Returns the smoother stepped last.
-inline std::unique_ptr<Smoother> step_snapshot_copies(benchmark::State& state) {
+/// (16 copies, 400 kB and more), as a user's step does after other work. The pause (two clock
+/// reads) is paid once per 16 steps. `step` returns false when refused. Returns the smoother
+/// stepped last.
+template <class S, class Step>
+std::unique_ptr<S> step_copies(benchmark::State& state, const S& before, Step step) {
   constexpr int kCopies = 16;
-  const Snapshot& snap = snapshot();
-  std::vector<std::unique_ptr<Smoother>> copies;
-  for (int i = 0; i < kCopies; ++i) copies.push_back(std::make_unique<Smoother>(*snap.before));
+  std::vector<std::unique_ptr<S>> copies;
+  for (int i = 0; i < kCopies; ++i) copies.push_back(std::make_unique<S>(before));
   int next = kCopies, last = 0;
   for (auto _ : state) {
     if (next == kCopies) {
       state.PauseTiming();
-      for (auto& c : copies) *c = *snap.before;
+      for (auto& c : copies) *c = before;
       next = 0;
       state.ResumeTiming();
     }
-    Smoother& s = *copies[static_cast<std::size_t>(next)];
-    if (!s.step(snap.t, {}, snap.meas)) state.SkipWithError("the step was refused");
+    S& s = *copies[static_cast<std::size_t>(next)];
+    if (!step(s)) state.SkipWithError("the step was refused");
     benchmark::DoNotOptimize(s.newest().data());
     last = next++;
   }
   return std::move(copies[static_cast<std::size_t>(last)]);
+}
+
+/// Times step 201 on copies of the snapshot's smoother (step_copies).
+inline std::unique_ptr<Smoother> step_snapshot_copies(benchmark::State& state) {
+  const Snapshot& snap = snapshot();
+  return step_copies(state, *snap.before, [&](Smoother& s) { return s.step(snap.t, {}, snap.meas).accepted(); });
 }
 
 /// Builds the snapshot window as a Ceres problem from the smoother's starting point, solves

@@ -10,12 +10,18 @@
 //   bench/classify_svm/nlos_svm_model.hpp), PerSample/LibSVM (libsvm on the same model file and
 //   inputs), PerSample/Consistency (p2, eq. 3-6), PerSample/DS (Dempster's rule on p1, p2).
 // Per epoch of 4 ranges (the counter s_per_range is the CPU time divided by 4):
-//   PerSample/Fusion/SameWindow, PerSample/Ceres (the window of bench/fixed_lag/
-//   fixed_lag_window.hpp solved by our smoother and by Ceres' fastest solver there, sparse
-//   normal Cholesky, to the same solution), PerSample/Fusion/Stream (steady state),
+//   PerSample/Fusion/SameWindow, PerSample/Ceres, PerSample/TinySolver: the paper's fusion, the
+//   UWB/IMU factor graph of imu_window.hpp (10 planar IMU states, IMU factors of the epoch's
+//   10 samples preintegrated, 4 ranges per state), one step of it (preintegration and solve)
+//   by our smoother, and the same window solved by Ceres' fastest solver there (sparse normal
+//   Cholesky) and by Ceres' TinySolver (dense, given our analytic Jacobians), to the same
+//   solution; PerSample/Fusion/Stream (steady state);
+//   PerSample/CvFusion/SameWindow, PerSample/CvCeres: the constant-velocity window of
+//   bench/fixed_lag/fixed_lag_window.hpp (10 planar position-velocity states), our step and
+//   Ceres';
 //   PerSample/Total/Epoch4: each of the epoch's 4 ranges through the NLOS pipeline's classifier
 //   (pipelines/nlos_uwb/classifier.hpp: features, SVM + consistency + D-S + the eq. 8
-//   decision), its paper attach rule for the epoch (policies.hpp), and the smoother step.
+//   decision), its paper attach rule for the epoch (policies.hpp), and the IMU graph's step.
 // Every benchmark checks its result before timing and reports an error instead of a time when
 // the check fails.
 #include <benchmark/benchmark.h>
@@ -34,11 +40,14 @@
 #include "ctxfuse/pipelines/nlos_uwb/classifier.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/policies.hpp"
 #include "fixed_lag_window.hpp"
+#include "imu_window.hpp"
 #include "nlos_svm_model.hpp"
 
 namespace {
 using namespace ctxfuse;
-using namespace ctxfuse::bench::fixed_lag_window;
+namespace cv = ctxfuse::bench::fixed_lag_window;
+namespace iw = ctxfuse::bench::imu_window;
+using iw::dt;
 using ctxfuse::bench::NlosSvmBenchModel;
 namespace nu = ctxfuse::pipelines::nlos_uwb;
 constexpr int kRangesPerEpoch = 4;
@@ -169,26 +178,28 @@ void PerSample_DS(benchmark::State& state) {
 }
 
 /// Largest state difference between two windows of the same size.
-double window_gap(const Smoother::Window& a, const Smoother::Window& b) {
+template <class Window>
+double window_gap(const Window& a, const Window& b) {
   double gap = 0.0;
-  for (int i = 0; i < K; ++i)
-    gap = std::max(gap, (a.epochs[static_cast<std::size_t>(i)].x - b.epochs[static_cast<std::size_t>(i)].x).cwiseAbs().maxCoeff());
+  for (std::size_t i = 0; i < a.epochs.size(); ++i) gap = std::max(gap, (a.epochs[i].x - b.epochs[i].x).cwiseAbs().maxCoeff());
   return gap;
 }
 
 void PerSample_Fusion_SameWindow(benchmark::State& state) {
-  const Snapshot& snap = snapshot();
-  auto s = std::make_unique<Smoother>(*snap.before);
-  if (!s->step(snap.t, {}, snap.meas) || !(window_gap(s->window(), snap.after->window()) <= 1e-12)) {
+  const iw::Snapshot& snap = iw::snapshot();
+  auto s = std::make_unique<iw::Smoother>(*snap.before);
+  models::PlanarPreintegrated pre;
+  if (!iw::step(*s, snap.k, snap.meas, pre) || !(window_gap(s->window(), snap.after->window()) <= 1e-12)) {
     state.SkipWithError("the step does not reproduce the snapshot window");
     return;
   }
-  (void)step_snapshot_copies(state);
+  const auto last = iw::step_snapshot_copies(state);
   per_range_counter(state);
+  state.counters["iterations"] = last->report().iterations;
 }
 
 void PerSample_Fusion_Stream(benchmark::State& state) {
-  DriveStream stream;
+  iw::DriveStream stream;
   for (auto _ : state) {
     stream.step();
     benchmark::DoNotOptimize(stream.smoother->newest().data());
@@ -197,16 +208,47 @@ void PerSample_Fusion_Stream(benchmark::State& state) {
   per_range_counter(state);
 }
 
+/// Ceres on a snapshot window: Solve is the IMU graph's (iw::) or the constant-velocity
+/// window's (cv::) solve_with_ceres.
+template <double (*Solve)(const ceres::Solver::Options&, ceres::Solver::Summary&)>
 void PerSample_Ceres(benchmark::State& state) {
-  const ceres::Solver::Options options = ceres_options(ceres::SPARSE_NORMAL_CHOLESKY);
+  const ceres::Solver::Options options = cv::ceres_options(ceres::SPARSE_NORMAL_CHOLESKY);
   ceres::Solver::Summary summary;
-  const double gap = solve_with_ceres(options, summary);
+  const double gap = Solve(options, summary);
   if (!(gap <= 1e-6)) {
     state.SkipWithError("Ceres does not reach the smoother's solution to 1e-6");
     return;
   }
-  for (auto _ : state) benchmark::DoNotOptimize(solve_with_ceres(options, summary));
+  for (auto _ : state) benchmark::DoNotOptimize(Solve(options, summary));
   state.counters["gap_to_smoother"] = gap;
+  state.counters["iterations"] = static_cast<double>(summary.iterations.size());
+  per_range_counter(state);
+}
+
+void PerSample_TinySolver(benchmark::State& state) {
+  auto solver = std::make_unique<iw::TinySolver>();  // its fixed-size workspace is ~0.2 MB
+  iw::tiny_options(*solver);
+  const double gap = iw::solve_with_tiny(*solver);
+  if (!(gap <= 1e-6)) {
+    state.SkipWithError("TinySolver does not reach the smoother's solution to 1e-6");
+    return;
+  }
+  for (auto _ : state) benchmark::DoNotOptimize(iw::solve_with_tiny(*solver));
+  state.counters["gap_to_smoother"] = gap;
+  state.counters["iterations"] = solver->summary.iterations;
+  per_range_counter(state);
+}
+
+// The constant-velocity window (10 planar position-velocity states); Ceres on it is
+// PerSample_Ceres<cv::solve_with_ceres>.
+void PerSample_CvFusion_SameWindow(benchmark::State& state) {
+  const cv::Snapshot& snap = cv::snapshot();
+  auto s = std::make_unique<cv::Smoother>(*snap.before);
+  if (!s->step(snap.t, {}, snap.meas) || !(window_gap(s->window(), snap.after->window()) <= 1e-12)) {
+    state.SkipWithError("the step does not reproduce the snapshot window");
+    return;
+  }
+  (void)cv::step_snapshot_copies(state);
   per_range_counter(state);
 }
 
@@ -220,7 +262,7 @@ struct EpochChain {
   nu::Settings settings{};
   nu::NlosClassifier classifier{settings, pipeline_svm()};
   nu::PaperEpochRule rule{classify::FactorAttachPolicy{settings.mixed_epoch_belief}};
-  double speed = drive().start().mean[3];
+  double speed = iw::Drive::speed;
   std::array<nu::RangeVerdict, kRangesPerEpoch> verdicts{};
   std::array<bool, kRangesPerEpoch> attach{};
 
@@ -233,8 +275,8 @@ struct EpochChain {
 
   /// The epoch's measurements, attached as the rule says (or all, with attach_all: the
   /// classifiers still run, the step always fuses 4 ranges). Epochs come in time order.
-  Smoother::Measurements classify(long k, bool attach_all = false) {
-    const auto& now = drive().ranges[static_cast<std::size_t>(k % Drive::period)];
+  iw::Smoother::Measurements classify(long k, bool attach_all = false) {
+    const auto& now = iw::drive().ranges[static_cast<std::size_t>(k % iw::Drive::period)];
     for (std::size_t a = 0; a < kRangesPerEpoch; ++a) {
       messages::UwbRange r;
       r.t = static_cast<double>(k) * dt;
@@ -243,7 +285,7 @@ struct EpochChain {
       verdicts[a] = classifier.classify(r, speed);
     }
     rule.select(verdicts, attach);
-    Smoother::Measurements meas = drive().measurements(k);
+    iw::Smoother::Measurements meas = iw::drive().measurements(k);
     if (!attach_all)
       for (std::size_t a = 0; a < kRangesPerEpoch; ++a) meas.attached[a] = attach[a];
     return meas;
@@ -257,10 +299,10 @@ void PerSample_Total_Epoch4(benchmark::State& state, bool attach_all) {
     // form p1 p2 / (p1 p2 + q1 q2) with p2 of eq. 6 written out.
     EpochChain chain;
     (void)chain.classify(0);  // each anchor's first range: no range rate yet
-    for (long k = 1; k <= Drive::period; ++k) {
+    for (long k = 1; k <= iw::Drive::period; ++k) {
       (void)chain.classify(k);
-      const auto& now = drive().ranges[static_cast<std::size_t>(k % Drive::period)];
-      const auto& before = drive().ranges[static_cast<std::size_t>(k - 1)];
+      const auto& now = iw::drive().ranges[static_cast<std::size_t>(k % iw::Drive::period)];
+      const auto& before = iw::drive().ranges[static_cast<std::size_t>(k - 1)];
       for (std::size_t a = 0; a < kRangesPerEpoch; ++a) {
         const double change = now[a] - before[a];
         double prob[2];
@@ -276,11 +318,11 @@ void PerSample_Total_Epoch4(benchmark::State& state, bool attach_all) {
     }
   }
   EpochChain chain;
-  DriveStream stream;
+  iw::DriveStream stream;
   (void)chain.classify(stream.k);
   long attached = 0;
   for (auto _ : state) {
-    const Smoother::Measurements meas = chain.classify(stream.k + 1, attach_all);
+    const iw::Smoother::Measurements meas = chain.classify(stream.k + 1, attach_all);
     attached += meas.attached_count() > 0;
     stream.step(meas);
     benchmark::DoNotOptimize(stream.smoother->newest().data());
@@ -298,7 +340,10 @@ BENCHMARK(PerSample_Consistency)->Name("PerSample/Consistency");
 BENCHMARK(PerSample_DS)->Name("PerSample/DS");
 BENCHMARK(PerSample_Fusion_SameWindow)->Name("PerSample/Fusion/SameWindow")->Unit(benchmark::kMicrosecond);
 BENCHMARK(PerSample_Fusion_Stream)->Name("PerSample/Fusion/Stream")->Unit(benchmark::kMicrosecond);
-BENCHMARK(PerSample_Ceres)->Name("PerSample/Ceres")->Unit(benchmark::kMicrosecond);
+BENCHMARK(PerSample_Ceres<iw::solve_with_ceres>)->Name("PerSample/Ceres")->Unit(benchmark::kMicrosecond);
+BENCHMARK(PerSample_TinySolver)->Name("PerSample/TinySolver")->Unit(benchmark::kMicrosecond);
+BENCHMARK(PerSample_CvFusion_SameWindow)->Name("PerSample/CvFusion/SameWindow")->Unit(benchmark::kMicrosecond);
+BENCHMARK(PerSample_Ceres<cv::solve_with_ceres>)->Name("PerSample/CvCeres")->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(PerSample_Total_Epoch4, paper_rule, false)->Name("PerSample/Total/Epoch4")->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(PerSample_Total_Epoch4, all_attached, true)->Name("PerSample/Total/Epoch4/AllAttached")->Unit(benchmark::kMicrosecond);
 BENCHMARK_MAIN();
