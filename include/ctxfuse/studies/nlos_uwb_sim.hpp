@@ -111,6 +111,8 @@ struct NlosSimReport {
   std::vector<NlosSimVariant> variants;           // kNlosSimVariants, in order
   pipelines::nlos_uwb::Track proposed;            // the gated graph with the paper's rule (plots)
   LabelledRanges drive_ranges;                    // the evaluated drive's ranges and labels
+  std::vector<messages::ImuSample> drive_imu;     // the evaluated drive's IMU samples
+  pipelines::nlos_uwb::ImuFusionSettings imu_sheet;  // their data sheet, as the IMU rows use it
   std::vector<Eigen::Vector2d> anchors;           // the evaluated drive's anchors (plots)
   pipelines::nlos_uwb::NlosSvm svm_model;         // the SVMs used (trained on other seeds)
   RangeRateSvm svm_vu_model;
@@ -294,6 +296,8 @@ NlosSimReport evaluate_nlos_uwb_sim(const sim::DriveConfig& base, std::uint64_t 
   add_run(kNlosSimVariants[8], nu::run(rs, nu::RangeEkf<>(s), every, classifier, s));
   const std::vector<messages::ImuSample>& imu = d.imu;
   const nu::ImuFusionSettings sheet = imu_fusion_settings(d.config.imu);
+  rep.drive_imu = imu;
+  rep.imu_sheet = sheet;
   using ImuGraph = nu::ImuRangeSmoother<10, policies::NoGate>;
   add_run(kNlosSimVariants[9], nu::run(std::span<const messages::ImuSample>(imu), rs, ImuGraph(s, sheet), every, classifier, s));
   add_run(kNlosSimVariants[10], nu::run(std::span<const messages::ImuSample>(imu), rs, ImuGraph(s, sheet), paper, classifier, s));
