@@ -12,7 +12,7 @@
 // corrected to first order, without re-integration:
 //   dpsi(bg) = dpsi0 - T (bg - bg0)                            (exact),
 //   dv(b) = dv0 + dv/dbg (bg - bg0) + dv/dba (ba - ba0),  dp likewise.
-// The correction is exact in ba for a given bg; its error (remainder_bound) comes from the
+// The correction is exact in ba when bg = bg0; its error (remainder_bound) comes from the
 // heading error T (bg - bg0) inside the rotations and is bounded by
 //   |dv error| <= 1/2 dbg^2 sum_k dt_k t_k^2 |f_k - ba0| + |dbg| |dba| sum_k dt_k t_k,
 // t_k the time of sample k from the interval's start (|R(a + h) - R(a) - R'(a) h| <= h^2 / 2,
