@@ -147,6 +147,15 @@ inline std::unique_ptr<Smoother> step_snapshot_copies(benchmark::State& state) {
   return step_copies(state, *snap.before, [&](Smoother& s) { return s.step(snap.t, {}, snap.meas).accepted(); });
 }
 
+/// Largest element of the difference between states xs and a smoother window's solution.
+template <class States, class Window>
+double gap_to_window(const States& xs, const Window& w) {
+  double gap = 0.0;
+  for (int i = 0; i < w.size; ++i)
+    gap = std::max(gap, (xs[static_cast<std::size_t>(i)] - w.epochs[static_cast<std::size_t>(i)].x).cwiseAbs().maxCoeff());
+  return gap;
+}
+
 /// Builds the snapshot window as a Ceres problem from the smoother's starting point, solves
 /// it and returns the largest difference from the smoother's solution.
 inline double solve_with_ceres(const ceres::Solver::Options& options, ceres::Solver::Summary& summary) {
@@ -155,10 +164,7 @@ inline double solve_with_ceres(const ceres::Solver::Options& options, ceres::Sol
   ceres::Problem problem;
   test::add_window(w, xs, problem);
   ceres::Solve(options, &problem, &summary);
-  double gap = 0.0;
-  for (int i = 0; i < w.size; ++i)
-    gap = std::max(gap, (xs[static_cast<std::size_t>(i)] - w.epochs[static_cast<std::size_t>(i)].x).cwiseAbs().maxCoeff());
-  return gap;
+  return gap_to_window(xs, w);
 }
 
 inline ceres::Solver::Options ceres_options(ceres::LinearSolverType solver) {

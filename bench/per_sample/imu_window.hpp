@@ -27,6 +27,7 @@
 #include "ctxfuse/filters/fixed_lag.hpp"
 #include "ctxfuse/models/planar.hpp"
 #include "ctxfuse/models/planar_preintegration.hpp"
+#include "ctxfuse/pipelines/nlos_uwb/imu_smoother.hpp"
 #include "ctxfuse/sim/random.hpp"
 
 namespace ctxfuse::bench::imu_window {
@@ -38,15 +39,9 @@ using Motion = models::PlanarPreintegratedModel;
 using Smoother = FixedLagSmoother<Motion, models::PlanarRange, K, kAnchors>;
 constexpr double dt = 0.1, imu_dt = dt / kImuPerEpoch;
 
-/// The data sheet of the simulator's consumer MEMS IMU (pipelines/nlos_uwb ImuFusionSettings).
-inline models::PlanarImuModel imu_sheet() {
-  models::PlanarImuModel m;
-  m.accel_noise_density = 1.0e-3;
-  m.gyro_noise_density = 8.7e-5;
-  m.accel_bias_walk = 0.02 * std::sqrt(2.0 / 300.0);
-  m.gyro_bias_walk = 8.7e-5 * std::sqrt(2.0 / 300.0);
-  return m;
-}
+/// The data sheet of the simulator's consumer MEMS IMU: the pipeline's default
+/// (pipelines/nlos_uwb/imu_smoother.hpp ImuFusionSettings).
+inline models::PlanarImuModel imu_sheet() { return pipelines::nlos_uwb::ImuFusionSettings{}.model(); }
 
 /// A circle of radius 20 m, one lap in 100 s, inside 4 anchors at 2-3 m height, ranged at 10 Hz
 /// (sigma 0.1 m) from a tag at 1 m, with a 100 Hz IMU of constant biases and white noise; 1000
@@ -152,14 +147,6 @@ inline const Snapshot& snapshot() {
   return s;
 }
 
-/// Largest state difference between the states xs and the window's solution.
-inline double gap_to_window(const std::array<State, K>& xs, const Smoother::Window& w) {
-  double gap = 0.0;
-  for (int i = 0; i < w.size; ++i)
-    gap = std::max(gap, (xs[static_cast<std::size_t>(i)] - w.epochs[static_cast<std::size_t>(i)].x).cwiseAbs().maxCoeff());
-  return gap;
-}
-
 /// Times step 201 (preintegration and smoother step) on copies of the snapshot's smoother
 /// (fixed_lag_window.hpp's step_copies).
 inline std::unique_ptr<Smoother> step_snapshot_copies(benchmark::State& state) {
@@ -176,7 +163,7 @@ inline double solve_with_ceres(const ceres::Solver::Options& options, ceres::Sol
   ceres::Problem problem;
   test::add_window(w, xs, problem);
   ceres::Solve(options, &problem, &summary);
-  return gap_to_window(xs, w);
+  return fixed_lag_window::gap_to_window(xs, w);
 }
 
 /// The snapshot window as TinySolver's function: all states stacked (K x 8 parameters), the
@@ -226,15 +213,16 @@ using TinySolver = ceres::TinySolver<TinyWindow>;
 /// all-attached window).
 inline double solve_with_tiny(TinySolver& solver) {
   const Smoother::Window& w = snapshot().after->window();
-  for (int i = 0; i < w.size; ++i)
-    if (w.epochs[static_cast<std::size_t>(i)].factor_count != kAnchors || w.size != K) return std::numeric_limits<double>::infinity();
+  if (w.size != K) return std::numeric_limits<double>::infinity();
+  for (int i = 0; i < K; ++i)
+    if (w.epochs[static_cast<std::size_t>(i)].factor_count != kAnchors) return std::numeric_limits<double>::infinity();
   TinyWindow f{&w};
   TinySolver::Parameters x;
   for (int i = 0; i < K; ++i) x.segment<L::size>(i * L::size) = snapshot().start[static_cast<std::size_t>(i)];
   solver.Solve(f, &x);
   std::array<State, K> xs{};
   for (int i = 0; i < K; ++i) xs[static_cast<std::size_t>(i)] = x.segment<L::size>(i * L::size);
-  return gap_to_window(xs, w);
+  return fixed_lag_window::gap_to_window(xs, w);
 }
 
 inline void tiny_options(TinySolver& s) {

@@ -86,18 +86,10 @@ class PlanarPreintegrated {
     dv_dbg_ += -dt * t * da_dpsi;
     dv_dba_ += -dt * R;
 
-    // Covariance: Q <- F Q F' + Q_step, F = I + E with E's few non-zero blocks (planar.hpp).
+    // Covariance: Q <- F Q F' + Q_step, F = I + E with E's few non-zero blocks (planar.hpp),
+    // Q_step the model's own step noise (it depends on dt only).
     propagate_covariance(dt, 0.5 * dt * dt * da_dpsi, dt * da_dpsi, -0.5 * dt * dt * R, -dt * R);
-    const double qa = model_.accel_noise_density * model_.accel_noise_density;
-    for (int i = 0; i < 2; ++i) {
-      Q_(P + i, P + i) += qa * dt * dt * dt / 3.0;
-      Q_(P + i, V + i) += qa * dt * dt / 2.0;
-      Q_(V + i, P + i) += qa * dt * dt / 2.0;
-      Q_(V + i, V + i) += qa * dt;
-      Q_(BA + i, BA + i) += model_.accel_bias_walk * model_.accel_bias_walk * dt;
-    }
-    Q_(PSI, PSI) += model_.gyro_noise_density * model_.gyro_noise_density * dt;
-    Q_(BG, BG) += model_.gyro_bias_walk * model_.gyro_bias_walk * dt;
+    Q_ += model_.noise(Vector<dim>::Zero(), u, dt);
 
     // Deltas.
     dp_ += dv_ * dt + 0.5 * dt * dt * a;
