@@ -1,6 +1,7 @@
 // SvmPredictProbability/Ours vs /LibSvm: the same libsvm model file, loaded by libsvm and by our
-// loader, the same inputs; /Fast is ours with the fast Gauss transform (svm_fast_rbf.hpp), whose
-// one-off construction SvmFastRbfBuild times. The model and its protocol: nlos_svm_model.hpp (shared with
+// loader, the same inputs; /Fast is ours with the fast Gauss transform (svm_fast_rbf.hpp: the
+// target grid inside the data, the source boxes outside), /FastBoxes the same with the source
+// boxes only; SvmFastRbfBuild times the one-off construction. The model and its protocol: nlos_svm_model.hpp (shared with
 // bench/per_sample). Before timing, both predictors are run on every benchmark input and must
 // agree (decision value to 1e-9, probabilities to 1e-6), so the comparison is between equal
 // computations.
@@ -80,13 +81,21 @@ void SvmDecisionValue_LibSvm(benchmark::State& state) {
 // as a counter, with the plan (grid side h, order p, boxes, terms per box).
 struct FastFixture {
   SvmFastRbf<2, 2> fast;
-  double fallback_predict = 0.0, fallback_decision = 0.0;
+  double fallback_predict = 0.0, fallback_decision = 0.0, target = 0.0;
 };
 
+SvmFastRbfOptions boxes_only() {
+  SvmFastRbfOptions o;
+  o.target_grid = false;
+  return o;
+}
+
+template <bool Target>
 FastFixture& fast_fixture() {
   static FastFixture f = [] {
     auto& fx = fixture();
-    FastFixture r{SvmFastRbf<2, 2>(fx.ours)};
+    FastFixture r{SvmFastRbf<2, 2>(fx.ours, Target ? SvmFastRbfOptions{} : boxes_only())};
+    long target = 0;
     SvmPrediction<2> exact, out;
     SvmFastReport report;
     long predict_fallbacks = 0, decision_fallbacks = 0;
@@ -94,6 +103,7 @@ FastFixture& fast_fixture() {
       if (!svm_predict(fx.ours, fx.inputs[i], exact) || !r.fast.predict(fx.inputs[i], out, &report))
         throw std::runtime_error("benchmark input " + std::to_string(i) + " refused");
       predict_fallbacks += report.fallback;
+      target += report.target;
       double prob[2], dec = 0.0;
       const double libsvm_label = svm_predict_probability(fx.libsvm, fx.nodes[i].data(), prob);
       const double libsvm_vote = svm_predict_values(fx.libsvm, fx.nodes[i].data(), &dec);
@@ -112,6 +122,7 @@ FastFixture& fast_fixture() {
     }
     r.fallback_predict = static_cast<double>(predict_fallbacks) / static_cast<double>(fx.inputs.size());
     r.fallback_decision = static_cast<double>(decision_fallbacks) / static_cast<double>(fx.inputs.size());
+    r.target = static_cast<double>(target) / static_cast<double>(fx.inputs.size());
     return r;
   }();
   return f;
@@ -123,13 +134,17 @@ void plan_counters(benchmark::State& state, const SvmFastRbfPlan& plan) {
   state.counters["order"] = plan.order;
   state.counters["boxes"] = plan.boxes;
   state.counters["terms"] = plan.terms;
+  state.counters["target_h"] = plan.target.h;
+  state.counters["target_order"] = plan.target.order;
+  state.counters["target_cells"] = static_cast<double>(plan.target.cells);
+  state.counters["target_terms"] = plan.target.terms;
 }
 
-// SvmPredictProbability/Fast (Probabilities) and SvmDecisionValue/Fast.
-template <bool Probabilities>
+// SvmPredictProbability/Fast (Probabilities) and SvmDecisionValue/Fast; Target false: /FastBoxes.
+template <bool Probabilities, bool Target>
 void SvmFast(benchmark::State& state) {
   auto& fx = fixture();
-  auto& ff = fast_fixture();
+  auto& ff = fast_fixture<Target>();
   SvmPrediction<2> out;
   std::size_t i = 0;
   for (auto _ : state) {
@@ -144,17 +159,21 @@ void SvmFast(benchmark::State& state) {
   }
   if constexpr (Probabilities) state.counters["support_vectors"] = static_cast<double>(fx.ours.num_support_vectors());
   state.counters["fallback_fraction"] = Probabilities ? ff.fallback_predict : ff.fallback_decision;
+  state.counters["target_fraction"] = ff.target;
   plan_counters(state, ff.fast.plan());
 }
 
-// The one-off cost of the fast evaluator: choosing (h, p) and building the expansions.
+// The one-off cost of the fast evaluator: choosing (h, p) and building the expansions; Target
+// false: the source boxes alone (/FastBoxes).
+template <bool Target>
 void SvmFastRbfBuild(benchmark::State& state) {
   auto& fx = fixture();
+  const SvmFastRbfOptions options = Target ? SvmFastRbfOptions{} : boxes_only();
   for (auto _ : state) {
-    SvmFastRbf<2, 2> fast(fx.ours);
+    SvmFastRbf<2, 2> fast(fx.ours, options);
     benchmark::DoNotOptimize(fast.plan().order);
   }
-  plan_counters(state, SvmFastRbf<2, 2>(fx.ours).plan());
+  plan_counters(state, SvmFastRbf<2, 2>(fx.ours, options).plan());
 }
 
 // The kernel block alone (256 support vectors, 2 features) on each compiled instruction set,
@@ -208,9 +227,12 @@ BENCHMARK(SvmPredictProbability_Ours)->Name(CTXFUSE_BENCH_NAME("SvmPredictProbab
 BENCHMARK(SvmPredictProbability_LibSvm)->Name(CTXFUSE_BENCH_NAME("SvmPredictProbability", "LibSvm"))->Unit(benchmark::kMicrosecond);
 BENCHMARK(SvmDecisionValue_Ours)->Name(CTXFUSE_BENCH_NAME("SvmDecisionValue", "Ours"))->Unit(benchmark::kMicrosecond);
 BENCHMARK(SvmDecisionValue_LibSvm)->Name(CTXFUSE_BENCH_NAME("SvmDecisionValue", "LibSvm"))->Unit(benchmark::kMicrosecond);
-BENCHMARK(SvmFast<true>)->Name(CTXFUSE_BENCH_NAME("SvmPredictProbability", "Fast"))->Unit(benchmark::kMicrosecond);
-BENCHMARK(SvmFast<false>)->Name(CTXFUSE_BENCH_NAME("SvmDecisionValue", "Fast"))->Unit(benchmark::kMicrosecond);
-BENCHMARK(SvmFastRbfBuild)->Name(CTXFUSE_BENCH_NAME("SvmFastRbfBuild", "Fast"))->Unit(benchmark::kMillisecond);
+BENCHMARK(SvmFast<true, true>)->Name(CTXFUSE_BENCH_NAME("SvmPredictProbability", "Fast"))->Unit(benchmark::kMicrosecond);
+BENCHMARK(SvmFast<false, true>)->Name(CTXFUSE_BENCH_NAME("SvmDecisionValue", "Fast"))->Unit(benchmark::kMicrosecond);
+BENCHMARK(SvmFast<true, false>)->Name(CTXFUSE_BENCH_NAME("SvmPredictProbability", "FastBoxes"))->Unit(benchmark::kMicrosecond);
+BENCHMARK(SvmFast<false, false>)->Name(CTXFUSE_BENCH_NAME("SvmDecisionValue", "FastBoxes"))->Unit(benchmark::kMicrosecond);
+BENCHMARK(SvmFastRbfBuild<true>)->Name(CTXFUSE_BENCH_NAME("SvmFastRbfBuild", "Fast"))->Unit(benchmark::kMillisecond);
+BENCHMARK(SvmFastRbfBuild<false>)->Name(CTXFUSE_BENCH_NAME("SvmFastRbfBuild", "FastBoxes"))->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -7,8 +7,11 @@
 //   python3 bench/per_sample/table.py out/bench/bench_per_sample.json   (table beside the paper's)
 //
 // Per range: PerSample/SVM (our RBF SVM with probabilities, the paper-sized model of
-//   bench/classify_svm/nlos_svm_model.hpp), PerSample/LibSVM (libsvm on the same model file and
-//   inputs), PerSample/Consistency (p2, eq. 3-6), PerSample/DS (Dempster's rule on p1, p2).
+//   bench/classify_svm/nlos_svm_model.hpp, through the evaluator the NLOS classifier builds:
+//   classify::SvmFastRbf with its automatic choice, here the fast Gauss transform),
+//   PerSample/SVM/Exact (the exact kernel sum of svm.hpp), PerSample/LibSVM (libsvm on the same
+//   model file and inputs), PerSample/Consistency (p2, eq. 3-6), PerSample/DS (Dempster's rule on
+//   p1, p2).
 // Per epoch of 4 ranges (the counter s_per_range is the CPU time divided by 4):
 //   PerSample/Fusion/SameWindow, PerSample/Ceres, PerSample/TinySolver: the paper's fusion, the
 //   UWB/IMU factor graph of imu_window.hpp (10 planar IMU states, IMU factors of the epoch's
@@ -37,6 +40,7 @@
 #include "ctxfuse/classify/consistency.hpp"
 #include "ctxfuse/classify/dempster_shafer.hpp"
 #include "ctxfuse/classify/svm.hpp"
+#include "ctxfuse/classify/svm_fast_rbf.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/classifier.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/policies.hpp"
 #include "fixed_lag_window.hpp"
@@ -117,7 +121,47 @@ const Probabilities& probabilities() {
   return p;
 }
 
+/// The evaluator the pipeline's classifier builds (automatic choice), checked once against the
+/// exact path on every input (probabilities to 1e-9, labels equal).
+struct Evaluator {
+  nu::NlosSvmEvaluator fast{model().ours};
+  bool ok = true;
+  Evaluator() {
+    const auto& m = model();
+    classify::SvmPrediction<2> exact, out;
+    for (const auto& x : m.inputs) {
+      ok = ok && classify::svm_predict(m.ours, x, exact).accepted() && fast.predict(x, out).accepted() &&
+           out.label == exact.label && std::abs(out.probabilities[0] - exact.probabilities[0]) <= 1e-9;
+    }
+  }
+};
+
+const Evaluator& evaluator() {
+  static const Evaluator e;
+  return e;
+}
+
 void PerSample_SVM(benchmark::State& state) {
+  if (!have_model(state)) return;
+  if (!evaluator().ok) {
+    state.SkipWithError("the fast evaluator and the exact path disagree");
+    return;
+  }
+  const auto& m = model();
+  const auto& fast = evaluator().fast;
+  classify::SvmPrediction<2> out;
+  std::size_t i = 0;
+  for (auto _ : state) {
+    static_cast<void>(fast.predict(m.inputs[i], out));  // inputs checked by the fixture
+    benchmark::DoNotOptimize(out.probabilities[0]);
+    i = (i + 1) % m.inputs.size();
+  }
+  state.counters["support_vectors"] = static_cast<double>(m.ours.num_support_vectors());
+  state.counters["fast"] = fast.plan().fast;
+  state.counters["target_cells"] = static_cast<double>(fast.plan().target.cells);
+}
+
+void PerSample_SVM_Exact(benchmark::State& state) {
   if (!have_model(state)) return;
   const auto& m = model();
   classify::SvmPrediction<2> out;
@@ -335,6 +379,7 @@ void PerSample_Total_Epoch4(benchmark::State& state, bool attach_all) {
 }  // namespace
 
 BENCHMARK(PerSample_SVM)->Name("PerSample/SVM")->Unit(benchmark::kMicrosecond);
+BENCHMARK(PerSample_SVM_Exact)->Name("PerSample/SVM/Exact")->Unit(benchmark::kMicrosecond);
 BENCHMARK(PerSample_LibSVM)->Name("PerSample/LibSVM")->Unit(benchmark::kMicrosecond);
 BENCHMARK(PerSample_Consistency)->Name("PerSample/Consistency");
 BENCHMARK(PerSample_DS)->Name("PerSample/DS");

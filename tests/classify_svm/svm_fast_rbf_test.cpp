@@ -50,9 +50,12 @@ bool same(const SvmPrediction<MaxClasses>& a, const SvmPrediction<MaxClasses>& b
          a.has_probabilities == b.has_probabilities && a.probabilities == b.probabilities;
 }
 
-SvmFastRbfOptions forced_fast() {
+// target: the target grid for queries inside the data (svm_fast_rbf_local.hpp); false: the
+// source boxes everywhere.
+SvmFastRbfOptions forced_fast(bool target = true) {
   SvmFastRbfOptions o;
   o.mode = Mode::fast;
+  o.target_grid = target;
   return o;
 }
 
@@ -60,6 +63,7 @@ SvmFastRbfOptions forced_fast() {
 // units) and the largest ratio |f_fast - f_exact| / E over all queries and machines.
 struct BoundStats {
   bool eligible = false;
+  long target_cells = 0, target_answers = 0;  // the target grid's size and the queries it answered
   std::vector<double> inside;
   double worst_ratio = 0.0;
   double median_inside() {
@@ -80,17 +84,20 @@ std::vector<int> instruction_sets() {
 }
 
 template <int Dim, int MaxClasses>
-BoundStats check_bound(const SvmModel<Dim, MaxClasses>& model, int queries, unsigned seed, int isa) {
-  auto options = forced_fast();
+BoundStats check_bound(const SvmModel<Dim, MaxClasses>& model, int queries, unsigned seed, int isa, bool target) {
+  auto options = forced_fast(target);
   options.instruction_set = isa;
   const SvmFastRbf<Dim, MaxClasses> fast(model, options);
   BoundStats stats;
   stats.eligible = fast.plan().eligible;
-  if (!stats.eligible) return stats;
+  stats.target_cells = fast.plan().target.cells;
+  if (!stats.eligible || (target && stats.target_cells == 0)) return stats;  // no grid: as the box pass
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   SvmPrediction<MaxClasses> exact;
-  SCOPED_TRACE("instruction set " + std::to_string(isa));
+  SCOPED_TRACE("instruction set " + std::to_string(isa) + (target ? ", target grid" : ", source boxes"));
+  SvmPrediction<MaxClasses> out;
+  SvmFastReport report;
   for (int q = 0; q < queries; ++q) {
     Eigen::Matrix<double, Dim, 1> xs;  // standardised units
     const double spread = q % 4 == 0 ? 6.0 : q % 4 == 1 ? 3.0 : q % 4 == 2 ? 40.0 : 1.0;
@@ -100,6 +107,10 @@ BoundStats check_bound(const SvmModel<Dim, MaxClasses>& model, int queries, unsi
     typename SvmFastRbf<Dim, MaxClasses>::Values values{}, bounds{};
     EXPECT_TRUE(fast.fast_values(x, values, bounds).accepted());
     EXPECT_TRUE(svm_decision(model, x, exact).accepted());
+    if (target && q % 2 == 1) {  // inside the data: count the target grid's answers
+      EXPECT_TRUE(fast.decision(x, out, &report).accepted());
+      stats.target_answers += report.target;
+    }
     for (int m = 0; m < model.num_machines(); ++m) {
       const auto i = static_cast<std::size_t>(m);
       const double error = std::abs(values[i] - exact.decision_values[i]);
@@ -112,14 +123,20 @@ BoundStats check_bound(const SvmModel<Dim, MaxClasses>& model, int queries, unsi
 }
 
 // |f_fast - f_exact| <= E(x) for every machine on random queries: inside the data, near support
-// vectors, outside, and far away; for every instruction set of the fast sums.
-// The widest instruction set gets `queries` queries, the others a quarter of them.
+// vectors, outside, and far away; with the source boxes alone for every instruction set of their
+// sums (the widest gets `queries` queries, the others a quarter of them; its stats in `boxes`),
+// and with the target grid where the build made one (`target`; target_cells 0: none).
+struct BothStats {
+  BoundStats boxes, target;
+};
+
 template <int Dim, int MaxClasses>
-BoundStats check_bound(const SvmModel<Dim, MaxClasses>& model, int queries, unsigned seed) {
-  BoundStats stats;
+BothStats check_bound(const SvmModel<Dim, MaxClasses>& model, int queries, unsigned seed) {
+  BothStats both;
   const auto sets = instruction_sets();
-  for (const int isa : sets) stats = check_bound(model, isa == sets.back() ? queries : queries / 4, seed, isa);
-  return stats;
+  for (const int isa : sets) both.boxes = check_bound(model, isa == sets.back() ? queries : queries / 4, seed, isa, false);
+  both.target = check_bound(model, queries, seed, -1, true);
+  return both;
 }
 
 // Random models (support vectors uniform in [-2, 2]^Dim, or spread over [-12, 12]^Dim so that
@@ -134,7 +151,8 @@ void random_models(int classes, int support_vectors, int queries) {
                                                        true, static_cast<unsigned>(100 * gamma + 10 * spread) + Dim);
       model.gamma = gamma;
       model.support_vectors *= spread;
-      auto stats = check_bound(model, queries, 7);
+      auto both = check_bound(model, queries, 7);
+      auto& stats = both.boxes;
       if (!stats.eligible) {
         EXPECT_TRUE(Dim >= 3 && gamma * spread * spread >= 2 * 36) << "Dim " << Dim << " gamma " << gamma << " spread " << spread;
         continue;
@@ -142,9 +160,22 @@ void random_models(int classes, int support_vectors, int queries) {
       const double median = stats.median_inside();
       // Not vacuous: well inside the acceptance tolerance (1e-9) on typical queries.
       EXPECT_LT(median, 1e-10) << "Dim " << Dim << " gamma " << gamma << " spread " << spread;
+      // The target grid exists wherever it fits its budgets: at least in 1-2-D with gamma
+      // spread^2 <= 1/2 (its cells and terms grow with that ratio). Where it exists, it answers
+      // the queries inside the data, with bounds as far inside the tolerance.
+      auto& target = both.target;
+      if (Dim <= 2 && gamma * spread * spread <= 0.5) {
+        EXPECT_GT(target.target_cells, 0) << "Dim " << Dim << " gamma " << gamma << " spread " << spread;
+      }
+      std::string target_note = "no target grid";
+      if (target.target_cells > 0) {
+        EXPECT_GT(target.target_answers, queries / 4) << "Dim " << Dim << " gamma " << gamma << " spread " << spread;
+        EXPECT_LT(target.median_inside(), 1e-10) << "Dim " << Dim << " gamma " << gamma << " spread " << spread;
+        target_note = "target grid " + fmt(target.median_inside()) + " worst_ratio " + fmt(target.worst_ratio);
+      }
       ::testing::Test::RecordProperty("median_bound_d" + std::to_string(Dim) + "_g" + std::to_string(gamma) + "_s" +
                                           std::to_string(spread) + "_c" + std::to_string(classes),
-                                      fmt(median) + " worst_ratio " + fmt(stats.worst_ratio));
+                                      fmt(median) + " worst_ratio " + fmt(stats.worst_ratio) + "; " + target_note);
     }
 }
 
@@ -219,10 +250,14 @@ NlosData train_nlos(int samples_per_anchor) {
 // Queries: the test distribution, plus points on segments between differently labelled points,
 // bisected to within 2^-30 of the boundary (decision value ~1e-9) and to 2^-45 (forces the
 // exact fallback; compared with the exact path only, as libsvm's rounding could differ there).
+// cells (if given): the target grid's cell count (0: the build made none, the boxes answered).
 template <int MaxClasses>
-void compare_with_libsvm(const Trained& t, int classes, std::vector<Eigen::Vector2d> points) {
+void compare_with_libsvm(const Trained& t, int classes, std::vector<Eigen::Vector2d> points, bool target,
+                         long* cells = nullptr) {
+  SCOPED_TRACE(target ? "target grid" : "source boxes");
   const auto model = svm_model_from_libsvm<2, MaxClasses>(*t.libsvm);
-  const SvmFastRbf<2, MaxClasses> fast(model, forced_fast());
+  const SvmFastRbf<2, MaxClasses> fast(model, forced_fast(target));
+  if (cells) *cells = fast.plan().target.cells;
   ASSERT_TRUE(fast.plan().eligible);
   const int M = model.num_machines();
   const std::size_t test_count = points.size();
@@ -240,7 +275,7 @@ void compare_with_libsvm(const Trained& t, int classes, std::vector<Eigen::Vecto
     }
   }
   ASSERT_GT(points.size(), test_count + 100);
-  int fast_count = 0, fallbacks = 0, fast_decisions = 0, fast_probabilities = 0;
+  int fast_count = 0, fallbacks = 0, fast_decisions = 0, fast_probabilities = 0, target_answers = 0;
   std::vector<double> dec(static_cast<std::size_t>(M)), prob(static_cast<std::size_t>(classes));
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Eigen::Vector2d& x = points[i];
@@ -256,6 +291,7 @@ void compare_with_libsvm(const Trained& t, int classes, std::vector<Eigen::Vecto
     ASSERT_TRUE(fast.predict(x, fast_prob, &r2).accepted());
     fast_count += r1.fast + r2.fast;
     fast_decisions += r1.fast, fast_probabilities += r2.fast;
+    target_answers += r1.target && r1.fast;
     fallbacks += r1.fallback + r2.fallback;
     EXPECT_EQ(fast_dec.label, exact_dec.label) << i;
     EXPECT_EQ(fast_prob.label, exact_prob.label) << i;
@@ -295,6 +331,11 @@ void compare_with_libsvm(const Trained& t, int classes, std::vector<Eigen::Vecto
   EXPECT_EQ(fast_count + fallbacks, 2 * static_cast<int>(points.size()));
   EXPECT_GT(fallbacks, 0);  // the 2^-45 points cannot be decided by the fast value
   EXPECT_GT(fast_decisions, static_cast<int>(test_count) / 2);
+  if (target && fast.plan().target.cells > 0) {
+    EXPECT_GT(target_answers, static_cast<int>(test_count) / 2);
+  } else {
+    EXPECT_EQ(target_answers, 0);
+  }
   if (classes == 2) {
     EXPECT_GT(fast_probabilities, static_cast<int>(test_count) / 2);
     EXPECT_LT(fallbacks / queries, 0.25);
@@ -314,12 +355,16 @@ std::vector<Eigen::Vector2d> normal_points(int count) {
 TEST(SvmFastRbf, TwoClassesMatchLibsvm) {
   const auto t = train(2, 1500, 11);
   ASSERT_NE(t->libsvm, nullptr);
-  compare_with_libsvm<2>(*t, 2, normal_points(3000));
+  for (const bool target : {true, false}) compare_with_libsvm<2>(*t, 2, normal_points(3000), target);
   // The bound is not vacuous on this paper-like model: well below the 1e-9 tolerance.
   const auto model = svm_model_from_libsvm<2, 2>(*t->libsvm);
-  auto stats = check_bound(model, 400, 9);
+  auto both = check_bound(model, 400, 9);
+  auto& stats = both.boxes;
   EXPECT_TRUE(stats.eligible);
   EXPECT_LT(stats.median_inside(), 1e-10);
+  if (both.target.target_cells > 0) {
+    EXPECT_LT(both.target.median_inside(), 1e-10);
+  }
   ::testing::Test::RecordProperty("support_vectors", std::to_string(model.num_support_vectors()));
   ::testing::Test::RecordProperty("median_bound", fmt(stats.median_inside()));
 }
@@ -327,7 +372,7 @@ TEST(SvmFastRbf, TwoClassesMatchLibsvm) {
 TEST(SvmFastRbf, ThreeClassesOneVsOneMatchLibsvm) {
   const auto t = train(3, 900, 12);
   ASSERT_NE(t->libsvm, nullptr);
-  compare_with_libsvm<4>(*t, 3, normal_points(2000));
+  for (const bool target : {true, false}) compare_with_libsvm<4>(*t, 3, normal_points(2000), target);
 }
 
 // The benchmark's NLOS protocol with 6,000 training samples (a few thousand support vectors;
@@ -338,8 +383,41 @@ TEST(SvmFastRbf, NlosProtocolModelMatchesLibsvm) {
   ASSERT_NE(d.trained->libsvm, nullptr);
   auto points = d.test;
   for (const auto& x : normal_points(1000)) points.push_back(x);
-  compare_with_libsvm<2>(*d.trained, 2, points);
+  long cells = 0;
+  compare_with_libsvm<2>(*d.trained, 2, points, true, &cells);
+  EXPECT_GT(cells, 0);  // this model gets a target grid
+  compare_with_libsvm<2>(*d.trained, 2, points, false);
   EXPECT_GT(d.trained->libsvm->l, 3000);
+}
+
+// The target grid with coarse truncation targets (low orders, so that truncation dominates the
+// bound): the bound holds on queries inside the data, and it is not loose by orders of
+// magnitude (some query's error reaches 1 % of it).
+TEST(SvmFastRbf, TargetGridTruncationBoundHoldsAndIsReached) {
+  for (const double target : {1e-3, 1e-6}) {
+    auto model = ctxfuse::test::random_model<2, 2>(SvmKernel::rbf, SvmMulticlass::one_vs_one, 2, 2000, true, 31);
+    model.gamma = 0.5;
+    model.support_vectors *= 2.0;
+    auto options = forced_fast();
+    options.truncation_target = target;
+    const SvmFastRbf<2, 2> fast(model, options);
+    ASSERT_GT(fast.plan().target.cells, 0);
+    std::mt19937_64 rng(8);
+    std::uniform_real_distribution<double> u(-4.0, 4.0);
+    double worst_ratio = 0.0;
+    for (int q = 0; q < 1000; ++q) {
+      const Eigen::Vector2d x(u(rng), u(rng));
+      SvmFastRbf<2, 2>::Values values{}, bounds{};
+      SvmPrediction<2> exact;
+      ASSERT_TRUE(fast.fast_values(x, values, bounds).accepted());
+      ASSERT_TRUE(svm_decision(model, x, exact).accepted());
+      const double error = std::abs(values[0] - exact.decision_values[0]);
+      EXPECT_LE(error, bounds[0]) << "target " << target << " query " << q;
+      worst_ratio = std::max(worst_ratio, error / bounds[0]);
+    }
+    EXPECT_GT(worst_ratio, 0.01) << "target " << target << ", order " << fast.plan().target.order;
+    ::testing::Test::RecordProperty("worst_ratio_" + fmt(target), fmt(worst_ratio) + " order " + std::to_string(fast.plan().target.order));
+  }
 }
 
 // One-vs-rest (our extension; libsvm has none): labels equal to the exact path's on every query,

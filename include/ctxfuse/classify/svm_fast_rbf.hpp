@@ -1,6 +1,9 @@
 // RBF SVM prediction whose per-sample cost does not grow with the number of support vectors: a
-// fast Gauss transform (source boxes, Taylor expansion) with a rigorous per-query error bound,
-// and the exact path (svm.hpp) whenever the bound cannot guarantee the exact path's answer.
+// fast Gauss transform with a rigorous per-query error bound, and the exact path (svm.hpp)
+// whenever the bound cannot guarantee the exact path's answer. Two tiers: inside the support
+// vectors' bounding box, the target grid of svm_fast_rbf_local.hpp (one Taylor expansion of the
+// whole sum per grid cell: one polynomial per query); elsewhere, or when the build budget allows
+// no target grid, the source boxes derived below.
 //
 // Expansion. The standardised support vectors are binned on a grid of boxes of side h, centre
 // c = k h (k integer, nearest). With y = x - c, sigma = s - c, rho = |sigma|, t = 2 gamma y.sigma,
@@ -35,7 +38,8 @@
 //   - decision value fl(S - rho) in both: + 4u (|S| + |rho|); exact path's clamp: + W 1e-307.
 // E(x) sums these over boxes and multiplies by 1 + 1e-6 (second-order terms, rounding of E).
 //
-// Choice of h and p (efficiency only: E(x) is computed per query whatever the choice). h =
+// Choice of h and p for the source boxes (efficiency only: E(x) is computed per query whatever
+// the choice). h =
 // 2^e {1, 5/4, 3/2, 7/4} with h sqrt(2 gamma) in [1/4, 4]; for each h the smallest p whose
 // truncation bound (2), summed over boxes (cut-off ones by (3)), is <= truncation_target (1e-10)
 // at 128 sample queries (support vectors: queries come from the data); then the (h, p) of least
@@ -45,7 +49,7 @@
 // Evaluation: kFgtLanes boxes per GNU vector (one AVX-512 register); the innermost Horner
 // polynomials run as up to four interleaved chains (the same operations per chain). On the
 // paper-sized model the 16 x 496 coefficients (63 KB) are streamed from L2 per query, which
-// bounds the speed; a local (target) expansion, one polynomial per query, would cut that 16-fold.
+// bounds the speed; the target grid reads one cell's 465 instead (bench_classify_svm).
 //
 // Use of the fast value: it is accepted only if every E_m <= value_tolerance (1e-9), the label is
 // certain (|f_m| > E_m for votes; gaps > E_i + E_j for one-vs-rest), and with probabilities:
@@ -71,6 +75,7 @@
 
 #include "ctxfuse/classify/svm.hpp"
 #include "ctxfuse/classify/svm_fast_rbf_kernel.hpp"
+#include "ctxfuse/classify/svm_fast_rbf_local.hpp"
 #include "ctxfuse/classify/svm_rbf.hpp"
 
 
@@ -84,6 +89,8 @@ struct SvmFastRbfOptions {
   int max_order = 40;
   int max_terms = 4096;  // T(p) per box and machine
   int instruction_set = -1;  // -1: the widest available; 0 baseline, 1 AVX2, 2 AVX-512 if available (tests)
+  bool target_grid = true;   // the per-cell expansions of svm_fast_rbf_local.hpp for queries inside the data
+  double max_build_terms = 2.5e8;  // the target grid's build budget (cells x SVs x terms x machines)
 };
 
 /// What the build chose. eligible: the fast structure exists; fast: predictions use it.
@@ -92,11 +99,13 @@ struct SvmFastRbfPlan {
   double h = 0.0, worst_truncation = 0.0;
   int order = 0, terms = 0, boxes = 0, slots = 0;
   double fast_cost = 0.0, exact_cost = 0.0;  // the automatic choice's estimates (ns-like units)
+  svm_detail::FgtLocalPlan target;  // the target grid (cells = 0: none; queries use the boxes)
 };
 
-/// Per query: whether the fast value was used, or the fast path ran and fell back to exact.
+/// Per query: whether the fast value was used, or the fast path ran and fell back to exact;
+/// target: the value came from the target grid (else from the source boxes).
 struct SvmFastReport {
-  bool fast = false, fallback = false;
+  bool fast = false, fallback = false, target = false;
   double bound = 0.0;  // max_m E_m(x) when the fast path ran
 };
 
@@ -113,6 +122,20 @@ class SvmFastRbf {
 
   explicit SvmFastRbf(const Model& model, SvmFastRbfOptions options = {}) : model_(model), options_(options) {
     if (model_.kernel == SvmKernel::rbf && svm_model_problem(model_).empty() && Dim <= 8) build();
+    if (plan_.eligible && options_.target_grid) {
+      typename svm_detail::FgtLocalGrid<Dim, Model::kMaxMachines>::Limits lim;
+      lim.truncation_target = options_.truncation_target;
+      lim.max_order = options_.max_order;
+      lim.max_terms = options_.max_terms;
+      // The build costs at most about what 10^4 exact predictions cost (a build term costs
+      // about twice an exact one, svm_bench.cpp), and the budget.
+      lim.max_build_terms = std::min(options_.max_build_terms,
+                                     2e4 * double(model_.num_support_vectors()) * model_.num_machines());
+      target_.build(model_.support_vectors, model_.coefficients, model_.gamma, exp_, lim);
+      plan_.target = target_.plan();
+      // Per query inside the grid (svm_bench.cpp): ~0.5 ns per term and machine + 60 ns.
+      if (plan_.target.cells > 0) plan_.fast_cost = std::min(plan_.fast_cost, 0.5 * plan_.target.terms * model_.num_machines() + 60.0);
+    }
     const auto mode = options_.mode;
     plan_.fast = plan_.eligible && (mode == SvmFastRbfOptions::Mode::fast ||
                                     (mode == SvmFastRbfOptions::Mode::automatic && plan_.fast_cost < 0.5 * plan_.exact_cost));
@@ -153,7 +176,7 @@ class SvmFastRbf {
     if (plan_.fast && coupled) r.fallback = true;
     if (plan_.fast && !coupled) {
       Values sums{}, bounds{};
-      evaluate(svm_standardize(model_, x), sums, bounds);
+      r.target = evaluate(svm_standardize(model_, x), sums, bounds);
       for (int m = 0; m < model_.num_machines(); ++m) r.bound = std::max(r.bound, bounds[idx(m)]);
       r.fast = accept(sums, bounds, probabilities && model_.has_probability, out);
       r.fallback = !r.fast;
@@ -223,7 +246,20 @@ class SvmFastRbf {
     return true;
   }
 
-  void evaluate(const Feature& xs, Values& sums, Values& bounds) const {
+  /// Sums and bounds from the target grid (true) or the source boxes (false).
+  bool evaluate(const Feature& xs, Values& sums, Values& bounds) const {
+    using namespace svm_detail;
+    const bool target = target_.evaluate(xs, sums.data(), bounds.data());
+    if (!target) box_sums(xs, sums, bounds);
+    for (int m = 0; m < model_.num_machines(); ++m) {
+      const auto i = idx(m);
+      bounds[i] = bounds[i] * (1.0 + 1e-6) + 4 * kFgtUnit * (std::abs(sums[i]) + std::abs(model_.rho[i])) +
+                  weight_total_[i] * 1e-307;
+    }
+    return target;
+  }
+
+  void box_sums(const Feature& xs, Values& sums, Values& bounds) const {
     using namespace svm_detail;
     FgtColumns<Dim> col;
     const double far = 600.0 / (Dim * model_.gamma);
@@ -244,11 +280,6 @@ class SvmFastRbf {
     FgtLayout lay = layout_;  // the pointers refreshed: copies of this object stay valid
     lay.coef = coef_.data(), lay.weight = weight_.data(), lay.column = column_.data();
     fgt_sums_dispatch<Dim, Model::kMaxMachines>(options_.instruction_set, lay, col, sums.data(), bounds.data());
-    for (int m = 0; m < model_.num_machines(); ++m) {
-      const auto i = idx(m);
-      bounds[i] = bounds[i] * (1.0 + 1e-6) + 4 * kFgtUnit * (std::abs(sums[i]) + std::abs(model_.rho[i])) +
-                  weight_total_[i] * 1e-307;
-    }
   }
 
   using Keyed = std::vector<std::pair<std::array<long long, Dim>, long>>;
@@ -266,6 +297,7 @@ class SvmFastRbf {
   std::vector<double> coef_, weight_;
   std::vector<std::int32_t> column_;
   svm_detail::FgtLayout layout_{};
+  svm_detail::FgtLocalGrid<Dim, Model::kMaxMachines> target_;
 };
 
 /// Bins the support vectors on the grid of side h (centres k h, k = nearbyint(s / h)): keyed
@@ -421,7 +453,7 @@ void SvmFastRbf<Dim, MaxClasses>::build() {
   half_ = half;
   layout_ = {coef_.data(), weight_.data(), column_.data(), static_cast<int>(chunks), M, T, p, gamma, 2 * gamma * half,
              inv_factorial * (1.0 + 1e-12), k_fixed, gamma * Dim * half * half};
-  plan_ = {true, false, h, best.worst, p, T, static_cast<int>(boxes), static_cast<int>(chunks * L), 0.0, 0.0};
+  plan_ = {true, false, h, best.worst, p, T, static_cast<int>(boxes), static_cast<int>(chunks * L), 0.0, 0.0, {}};
   // Automatic choice, per query (bench/classify_svm/svm_bench.cpp, AVX-512): exact ~0.45 ns per
   // support vector (+45 % per further machine); fast ~0.06 ns per slot term + 150 ns.
   plan_.exact_cost = 0.45 * double(n) * (1 + 0.45 * (M - 1));

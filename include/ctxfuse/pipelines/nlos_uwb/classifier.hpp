@@ -7,6 +7,9 @@
 // labels from residuals against those recordings' references), never on the run it scores.
 // Without a model p1 is absent and R is p2 alone (D-S with one source). Training the SVM
 // (libsvm) is in nlos_uwb/training.hpp: this header, the inference side, does not need libsvm.
+// The model is evaluated through classify::SvmFastRbf, built once at construction (shared by
+// copies of the classifier): its automatic choice takes the fast Gauss transform where it pays
+// (many support vectors), the exact sum otherwise; probabilities equal the exact path's to 1e-9.
 //
 // Per-anchor state is a fixed table of kMaxAnchors slots filled on first sight of an anchor;
 // an anchor beyond it gets no evidence (verdict NaN, LOS), never an allocation.
@@ -16,6 +19,7 @@
 
 #include <array>
 #include <cmath>
+#include <memory>
 #include <optional>
 #include <span>
 #include <vector>
@@ -23,6 +27,7 @@
 #include "ctxfuse/classify/consistency.hpp"
 #include "ctxfuse/classify/dempster_shafer.hpp"
 #include "ctxfuse/classify/svm.hpp"
+#include "ctxfuse/classify/svm_fast_rbf.hpp"
 #include "ctxfuse/features/nlos.hpp"
 #include "ctxfuse/messages/sensors.hpp"
 #include "ctxfuse/pipelines/nlos_uwb/policies.hpp"
@@ -31,6 +36,7 @@
 namespace ctxfuse::pipelines::nlos_uwb {
 
 using NlosSvm = classify::SvmModel<2, 2>;
+using NlosSvmEvaluator = classify::SvmFastRbf<2, 2>;
 inline constexpr int kNlosLabel = 1, kLosLabel = 0;
 
 /// The SVM's input: range rate v_u [m/s] and vehicle speed v_i [m/s].
@@ -45,11 +51,17 @@ class NlosClassifier {
  public:
   static constexpr int kMaxAnchors = 16;
 
-  explicit NlosClassifier(const Settings& s, std::optional<NlosSvm> svm = std::nullopt)
+  explicit NlosClassifier(const Settings& s, const std::optional<NlosSvm>& svm = std::nullopt)
+      : NlosClassifier(s, svm ? std::make_shared<const NlosSvmEvaluator>(*svm) : nullptr) {}
+
+  /// With an evaluator built elsewhere (one build for many classifiers); nullptr: no SVM.
+  NlosClassifier(const Settings& s, std::shared_ptr<const NlosSvmEvaluator> svm)
       : consistency_(s.consistency()), decision_{s.nlos_belief_threshold}, svm_(std::move(svm)), max_speed_(s.max_speed_mps),
         max_range_(s.max_range_m) {}
 
-  bool has_svm() const { return svm_.has_value(); }
+  bool has_svm() const { return svm_ != nullptr; }
+  /// The SVM's evaluator (its plan() says whether the fast Gauss transform is used); nullptr: none.
+  const NlosSvmEvaluator* svm() const { return svm_.get(); }
 
   /// Verdict on range r with the platform's current speed; `input` receives the SVM's features
   /// (NaN when the anchor has no previous range). Every range of the run must come through
@@ -67,8 +79,8 @@ class NlosClassifier {
     v.p2 = consistency_.nlos_probability(f.consistency_error_m);
     if (svm_ && in.finite()) {
       classify::SvmPrediction<2> out;
-      if (classify::svm_predict(*svm_, Eigen::Vector2d(in.vector()), out).accepted() && out.has_probabilities)
-        v.p1 = out.probabilities[svm_->labels[0] == kNlosLabel ? 0 : 1];
+      if (svm_->predict(Eigen::Vector2d(in.vector()), out).accepted() && out.has_probabilities)
+        v.p1 = out.probabilities[svm_->model().labels[0] == kNlosLabel ? 0 : 1];
     }
     if (std::isnan(v.p1)) {
       v.R = v.p2;
@@ -95,7 +107,7 @@ class NlosClassifier {
 
   classify::ConsistencyModel consistency_;
   classify::NlosDecisionRule decision_;
-  std::optional<NlosSvm> svm_;
+  std::shared_ptr<const NlosSvmEvaluator> svm_;
   double max_speed_, max_range_;
   std::array<int, kMaxAnchors> ids_{};
   std::array<features::NlosFeatureExtractor, kMaxAnchors> extractors_{};
