@@ -138,7 +138,7 @@ TEST(WindowAlgebra, NormalEquationsSolveAndLastCovarianceEqualDense) {
   ASSERT_EQ(chol.factorize(sys), Problem::none);
   std::array<Vector<N>, 8> b, dx;
   for (int i = 0; i < chain.n; ++i) b[static_cast<std::size_t>(i)] = -sys.gradient[static_cast<std::size_t>(i)];
-  chol.solve(b, dx);
+  chol.solve(sys, b, dx);
   const Eigen::VectorXd dense_dx = H.ldlt().solve(-g);
   for (int i = 0; i < chain.n; ++i)
     EXPECT_LT((dx[static_cast<std::size_t>(i)] - dense_dx.segment<N>(N * i)).cwiseAbs().maxCoeff(), 1e-10);
@@ -150,7 +150,7 @@ TEST(WindowAlgebra, NormalEquationsSolveAndLastCovarianceEqualDense) {
   Eigen::MatrixXd Hd = H;
   for (int j = 0; j < Hd.rows(); ++j) Hd(j, j) += 0.3 * H(j, j);
   ASSERT_EQ(chol.factorize(sys, 0.3), Problem::none);
-  chol.solve(b, dx);
+  chol.solve(sys, b, dx);
   const Eigen::VectorXd damped = Hd.ldlt().solve(-g);
   for (int i = 0; i < chain.n; ++i)
     EXPECT_LT((dx[static_cast<std::size_t>(i)] - damped.segment<N>(N * i)).cwiseAbs().maxCoeff(), 1e-10);
@@ -250,12 +250,14 @@ void expect_spd_inverse_matches_eigen() {
 }
 
 TEST(WindowAlgebra, SpdInverseEqualsEigenAndRefusesWhatIsNotPositiveDefinite) {
-  // 4 x 4 takes the 2 x 2 block formula (the UWB smoother's state), the others LDL'.
+  // 4 x 4 takes the 2 x 2 block formula (the UWB smoother's state), 8 x 8 the 4 x 4 block
+  // formula (the planar IMU state), the others LDL'.
   expect_spd_inverse_matches_eigen<1>();
   expect_spd_inverse_matches_eigen<2>();
   expect_spd_inverse_matches_eigen<3>();
   expect_spd_inverse_matches_eigen<4>();
   expect_spd_inverse_matches_eigen<6>();
+  expect_spd_inverse_matches_eigen<8>();
 }
 
 /// One EKF update of `belief` with `model` against one Gauss-Newton step on the prior factor
@@ -273,7 +275,7 @@ void expect_ekf_update_is_one_gauss_newton_step(const Model& model, Gaussian<Dim
   BlockTridiagonalCholesky<Dim, 1> chol;
   ASSERT_EQ(chol.factorize(sys), Problem::none);
   std::array<Vector<Dim>, 1> b{-sys.gradient[0]}, dx;
-  chol.solve(b, dx);
+  chol.solve(sys, b, dx);
 
   ASSERT_TRUE(ekf::update<Dim>(model, belief, z));
   EXPECT_LT(((belief.mean - prior.mean) - dx[0]).cwiseAbs().maxCoeff(), 1e-12) << trial;

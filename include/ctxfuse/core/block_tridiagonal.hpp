@@ -47,6 +47,26 @@ struct AffineFactorBlocks {
   }
 };
 
+/// The information Lambda = W'W of a binary factor r = W d, d = xj - f(xi), whose Jacobians
+/// are -W F(xi) and W (a motion factor whose model subtracts plainly but is not affine):
+///   Hii = F' Lambda F,  Hji = -Lambda F,  Hjj = Lambda,  J'r = -F' Lambda d and Lambda d,
+/// so Hjj is a constant of the factor and a linearisation costs two N x N products (Lambda F,
+/// then F' times it) instead of forming W F and three J'J products. Formed once when the
+/// factor is made (`f.W`); the factor supplies d and F (`f.unwhitened(xi, xj, &F)`).
+template <int N>
+struct WhitenedInformation {
+  SquareMatrix<N> Lambda = SquareMatrix<N>::Zero();
+
+  /// False, nothing changed, when W is not finite.
+  template <BinaryFactor F>
+  bool compute(const F& f) {
+    static_assert(F::dim == N);
+    if (!all_finite(f.W)) return false;
+    Lambda.noalias() = f.W.transpose().lazyProduct(f.W);
+    return true;
+  }
+};
+
 /// H = sum J' J and g = sum J' r over the factors added, for up to K states of dimension N,
 /// and the cost 1/2 sum |r|^2. diagonal[i] = H(i, i), lower[i] = H(i + 1, i) (the block
 /// below the diagonal, so that every product of the solve below is a plain one: a
@@ -119,6 +139,26 @@ struct BlockTridiagonal {
     return true;
   }
 
+  /// Adds a binary factor r = W (xj - f(xi)) on states i and i + 1 from its information
+  /// (WhitenedInformation).
+  template <BinaryFactor F>
+  bool add(const F& f, const WhitenedInformation<N>& info, int i, const Vector<N>& xi, const Vector<N>& xj) {
+    SquareMatrix<N> Fx;
+    const Vector<N> d = f.unwhitened(xi, xj, &Fx);
+    if (!all_finite(d) || !all_finite(Fx)) return false;
+    const auto k = static_cast<std::size_t>(i);
+    const SquareMatrix<N> LF = info.Lambda.lazyProduct(Fx);
+    const SquareMatrix<N> FtL = LF.transpose();  // F' Lambda, stored: plain products below
+    const Vector<N> gj = info.Lambda.lazyProduct(d);
+    diagonal[k].noalias() += FtL.lazyProduct(Fx);
+    diagonal[k + 1] += info.Lambda;
+    lower[k] -= LF;
+    gradient[k].noalias() -= FtL.lazyProduct(d);
+    gradient[k + 1] += gj;
+    cost += 0.5 * d.dot(gj);
+    return true;
+  }
+
   /// Adds an affine binary factor on states i and i + 1 from its blocks (AffineFactorBlocks).
   template <BinaryFactor F>
   bool add(const F& f, const AffineFactorBlocks<N>& blocks, int i, const Vector<N>& xi, const Vector<N>& xj) {
@@ -180,6 +220,33 @@ inline bool spd_inverse_4x4(const SquareMatrix<4>& S, SquareMatrix<4>& S_inv) {
   return true;
 }
 
+/// The 8 x 8 case by 4 x 4 blocks, S = [A B; B' C] (B' read from S's lower triangle), with the
+/// same algebra as the 4 x 4 one: T = A^-1 B, Z = (C - B' T)^-1, M = T Z,
+///   S^-1 = [A^-1 + M T', -M; -M', Z].
+/// S is positive definite exactly when A and its Schur complement are, which the two 4 x 4
+/// inversions decide. Four 4 x 4 products instead of the 8 x 8 LDL' and its triangular
+/// inverse: the planar IMU state of the UWB/IMU smoother inverts one such block per state and
+/// iteration.
+inline bool spd_inverse_8x8(const SquareMatrix<8>& S, SquareMatrix<8>& S_inv) {
+  SquareMatrix<4> A_inv, Z;
+  if (!spd_inverse_4x4(S.topLeftCorner<4, 4>(), A_inv)) return false;
+  const SquareMatrix<4> Bt = S.bottomLeftCorner<4, 4>();  // B'
+  SquareMatrix<4> T;
+  T.noalias() = A_inv.lazyProduct(Bt.transpose());
+  SquareMatrix<4> C = S.bottomRightCorner<4, 4>();
+  C.noalias() -= Bt.lazyProduct(T);
+  if (!spd_inverse_4x4(C, Z)) return false;
+  SquareMatrix<4> M;
+  M.noalias() = T.lazyProduct(Z);
+  S_inv.topLeftCorner<4, 4>() = A_inv;
+  S_inv.topLeftCorner<4, 4>().noalias() += M.lazyProduct(T.transpose());
+  S_inv.topRightCorner<4, 4>() = -M;
+  S_inv.bottomLeftCorner<4, 4>() = -M.transpose();
+  S_inv.bottomRightCorner<4, 4>() = Z;
+  symmetrize(S_inv);
+  return all_finite(S_inv);
+}
+
 /// spd_inverse from the LDL' factorisation (unit lower L, D > 0): S^-1 = L^-T D^-1 L^-1. No
 /// square roots, and every loop bound a compile-time constant (static_for over the columns),
 /// so the compiler emits straight-line code.
@@ -221,11 +288,14 @@ bool spd_inverse_ldl(const SquareMatrix<N>& S, SquareMatrix<N>& S_inv) {
 
 /// Inverse of a small symmetric positive definite matrix, reading S's lower triangle; false
 /// (S_inv unspecified) when S is not positive definite or holds NaN/Inf. The smoother inverts
-/// one block per state per iteration: 4 x 4 by 2 x 2 blocks, other sizes by LDL'.
+/// one block per state per iteration: 4 x 4 by 2 x 2 blocks, 8 x 8 by 4 x 4 blocks, other sizes
+/// by LDL'.
 template <int N>
 bool spd_inverse(const SquareMatrix<N>& S, SquareMatrix<N>& S_inv) {
   if constexpr (N == 4)
     return detail::spd_inverse_4x4(S, S_inv);
+  else if constexpr (N == 8)
+    return detail::spd_inverse_8x8(S, S_inv);
   else
     return detail::spd_inverse_ldl<N>(S, S_inv);
 }
@@ -242,7 +312,6 @@ struct BlockTridiagonalCholesky {
   int size = 0;
   std::array<SquareMatrix<N>, K> S_inv{};
   std::array<SquareMatrix<N>, K> G{};
-  std::array<SquareMatrix<N>, K> lower{};  // the system's L_i, for the forward substitution
 
   /// Problem::system_not_positive_definite when a Schur complement is not (rank deficiency,
   /// NaN, an indefinite factor); the factorisation is then unusable.
@@ -255,23 +324,21 @@ struct BlockTridiagonalCholesky {
         for (int j = 0; j < N; ++j) S(j, j) += lambda * std::max(sys.diagonal[k](j, j), 1e-6);
       if (i > 0) S.noalias() -= sys.lower[k - 1].lazyProduct(G[k - 1]);
       if (!spd_inverse<N>(S, S_inv[k])) return Problem::system_not_positive_definite;
-      if (i + 1 < size) {
-        G[k].noalias() = S_inv[k].lazyProduct(sys.lower[k].transpose());
-        lower[k] = sys.lower[k];
-      }
+      if (i + 1 < size) G[k].noalias() = S_inv[k].lazyProduct(sys.lower[k].transpose());
     }
     return Problem::none;
   }
 
-  /// x = H^-1 b (H the factorised matrix).
-  void solve(const std::array<Vector<N>, K>& b, std::array<Vector<N>, K>& x) const {
+  /// x = H^-1 b, H the factorised matrix; `sys` is the system factorised (its lower blocks
+  /// enter the forward substitution, read there instead of copied at each factorisation).
+  void solve(const BlockTridiagonal<N, K>& sys, const std::array<Vector<N>, K>& b, std::array<Vector<N>, K>& x) const {
     // Forward: c_i = b_i - L_{i-1} S_{i-1}^-1 c_{i-1} = b_i - L_{i-1} e_{i-1},
     // e_i = S_i^-1 c_i, held in x. Backward: x_i = e_i - G_i x_{i+1}.
     for (int i = 0; i < size; ++i) {
       const auto k = static_cast<std::size_t>(i);
       Vector<N> c = b[k];
       if constexpr (K > 1)  // (K = 1: g++ cannot see that the index stays in bounds)
-        if (i > 0) c.noalias() -= lower[k - 1].lazyProduct(x[k - 1]);
+        if (i > 0) c.noalias() -= sys.lower[k - 1].lazyProduct(x[k - 1]);
       x[k].noalias() = S_inv[k].lazyProduct(c);
     }
     if constexpr (K > 1) {

@@ -88,12 +88,13 @@ struct MotionFactor {
     if (J1) J1->noalias() = W * D_next;
     return W * d;
   }
-  /// x1 - f(x0) before whitening (r = W times it): what AffineFactorBlocks works from. Only
-  /// for a model without its own difference.
-  Vector<dim> unwhitened(const Vector<dim>& x0, const Vector<dim>& x1) const
+  /// x1 - f(x0) before whitening (r = W times it), and f's Jacobian at x0 when F is given:
+  /// what AffineFactorBlocks and WhitenedInformation work from. Only for a model without its
+  /// own difference.
+  Vector<dim> unwhitened(const Vector<dim>& x0, const Vector<dim>& x1, SquareMatrix<dim>* F = nullptr) const
     requires(!requires(const Vector<dim>& a, SquareMatrix<dim>* J) { model.difference(a, a, J, J); })
   {
-    return x1 - model.predict(x0, input, dt, nullptr);
+    return x1 - model.predict(x0, input, dt, F);
   }
   template <class T>
   Vector<dim, T> residual(const Vector<dim, T>& x0, const Vector<dim, T>& x1) const {

@@ -108,8 +108,13 @@ class FixedLagSmoother {
   /// when the factor is made, instead of at every linearisation of the window (K - 1 factors,
   /// about four linearisations per step).
   static constexpr bool affine_motion = AffineProcessModel<Motion>;
+  /// Otherwise, a model that subtracts plainly keeps its factor's information W'W, formed
+  /// once (WhitenedInformation): two products per linearisation instead of four.
+  static constexpr bool plain_motion =
+      !affine_motion && requires(const MotionFactor<Motion>& f, const State& a, SquareMatrix<dim>* J) { f.unwhitened(a, a, J); };
   struct NoMotionBlocks {};
-  using MotionBlocks = std::conditional_t<affine_motion, AffineFactorBlocks<dim>, NoMotionBlocks>;
+  using MotionBlocks = std::conditional_t<affine_motion, AffineFactorBlocks<dim>,
+                                          std::conditional_t<plain_motion, WhitenedInformation<dim>, NoMotionBlocks>>;
 
   struct Epoch {
     double time = 0.0;
@@ -176,6 +181,8 @@ class FixedLagSmoother {
     if (!all_finite(added.x)) return Status::failure(Problem::non_finite_prediction);
     if constexpr (affine_motion)
       if (!added.motion_blocks.compute(added.motion, x_prev, added.x)) return Status::failure(Problem::non_finite_prediction);
+    if constexpr (plain_motion)
+      if (!added.motion_blocks.compute(added.motion)) return Status::failure(Problem::non_finite_prediction);
     if (Status s = attach(meas, added.x, added); !s) return s;
 
     Window& next = spare();
@@ -248,7 +255,7 @@ class FixedLagSmoother {
       const Epoch& e = w.epochs[k];
       for (int j = 0; j < e.factor_count && ok; ++j) ok = sys.add(e.factors[static_cast<std::size_t>(j)], i, xs[k]);
       if (i > 0 && ok) {
-        if constexpr (affine_motion)
+        if constexpr (affine_motion || plain_motion)
           ok = sys.add(e.motion, e.motion_blocks, i - 1, xs[k - 1], xs[k]);
         else
           ok = sys.add(e.motion, i - 1, xs[k - 1], xs[k]);
@@ -283,7 +290,7 @@ class FixedLagSmoother {
       }
       undamped = lambda == 0.0;
       for (int i = 0; i < w.size; ++i) rhs[static_cast<std::size_t>(i)] = -sys.gradient[static_cast<std::size_t>(i)];
-      chol_.solve(rhs, dx);
+      chol_.solve(sys, rhs, dx);
       double largest = 0.0;
       for (int i = 0; i < w.size; ++i) {
         const auto k = static_cast<std::size_t>(i);
