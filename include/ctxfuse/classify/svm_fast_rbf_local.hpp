@@ -21,21 +21,30 @@
 //     exp(-gamma|y|^2 - gamma|d|^2 + max(t, 0)) <= G_s);
 // (2) magnitudes: sum_alpha |D_alpha y^alpha| exp(-gamma |y|^2) <= W_t (as (4) of the source
 //     boxes), so every rounding below is a count of u = 2^-53 times W_t:
-//     coefficients built in long double and rounded once (1 + (n + 3p + 4 Dim + 24 +
-//     gamma rho^2_max (Dim + 2)) u_ld / u), the nested Horner (2 (p - 1) + 2 Dim), the factor
+//     the coefficients (per block of 64 support vectors: per-feature factors
+//     exp(-gamma d_f^2) (2 gamma d_f)^j / j! formed in long double and rounded once, their
+//     product with coef in double, a double sum over the block, the block sums added in long
+//     double, the total rounded once: 2 Dim + 66 + (n / 64 + 2 Dim p + 8 + gamma rho^2_max
+//     (Dim + 2)) u_ld / u), the nested Horner (2 (p - 1) + 2 Dim), the factor
 //     prod_f exp(-gamma y_f^2) (9 Dim + 2 gamma Dim r^2 + 1), the exact path's blocked sums
 //     (ceil(n / 256) + 257 + 8);
 // (3) in W2_t units: the exact path's kernel argument (Dim + 2; max(gamma z^2, 1) e^{-gamma z^2}
 //     decreases in z and z >= m_s) and the computed offset y^ = fl(x - c) (|y^ - y| <= u r per
 //     feature, gradient 2 gamma z e^{-gamma z^2} <= 2 sqrt(gamma) max(gamma z^2, 1) e^{-gamma z^2}:
-//     2 sqrt(gamma Dim) r).
-// B_t = ((1) + u (2) W_t + u (3) W2_t)(1 + 1e-6), rounded up, is stored per cell and machine;
-// the caller adds the decision value's own rounding (4u (|S| + |rho|)) as for the source boxes.
+//     2 sqrt(gamma Dim) r);
+// (4) underflow, absolute: W (Dim + 4 p) e^(gamma Dim) max(1, r)^(p - 1) 2^-1074 (W the
+//     machine's sum of |coef|; a value below DBL_MIN is off by at most 2^-1075, the other factors
+//     of its term are at most e^gamma per feature).
+// B_t = ((1) + u (2) W_t + u (3) W2_t)(1 + 1e-6) + (4), rounded up, is stored per cell and
+// machine; the caller adds the decision value's own rounding (4u (|S| + |rho|)) as for the
+// source boxes. The bound's own sums (W_t, W2_t, (1)) run in double and long double: their
+// relative rounding, far below 1e-9, is covered by a factor 1 + 1e-9.
 //
 // Choice of (h, p) (efficiency only: B_t is computed for the grid built): h = 2^e {1, 5/4, 3/2,
 // 7/4} with h sqrt(2 gamma) in [1/8, 4]; for each h the smallest p whose truncation bound (1)
-// at up to 8 cells holding support vectors (support vectors sampled, weights scaled) is <= the
-// target; then the least T(p) among grids within the cell and build budgets.
+// at up to 64 cells holding support vectors (up to 512 support vectors sampled, weights scaled)
+// is <= the target; then the least T(p) among grids within the cell and build budgets
+// (svm_fast_rbf.hpp sets the build budget from the model's size).
 #pragma once
 
 #include <algorithm>
@@ -332,7 +341,13 @@ void FgtLocalGrid<Dim, MaxM>::build(const Sv& sv, const Coef& coef, double gamma
   }
   // Rounding allowances (header comment), in units of u.
   const double u = kFgtUnit, u_ld = std::numeric_limits<LD>::epsilon() / 2;
-  const double k_build = 2 * Dim + kBlock + 2 + (double(n) / kBlock + 4 * p + 8 + gamma * double(rho2_max) * (Dim + 2)) * u_ld / u;
+  const double k_build = 2 * Dim + kBlock + 2 + (double(n) / kBlock + 2 * Dim * p + 8 + gamma * double(rho2_max) * (Dim + 2)) * u_ld / u;
+  // Underflow: a table entry or a Horner step that lands below DBL_MIN is off by up to 2^-1075
+  // absolutely; the other factors of its term are at most e^gamma each (sum_j |A(f, i, j)| <=
+  // exp(-gamma d^2 + 2 gamma |d|)) and |y^alpha| <= max(1, r)^(p - 1), so per machine at most
+  // W (Dim + 4 p) e^(gamma Dim) max(1, r)^(p - 1) 2^-1074 (W: the machine's sum of |coef|).
+  const double underflow_scale = (Dim + 4.0 * p) * std::exp(std::min(gamma * Dim, 700.0)) *
+                                 std::pow(std::max(1.0, r_), p - 1) * 0x1p-1074;
   const double k_w = k_build + 2 * (p - 1) + 2 * Dim + 9 * Dim + 2 * gamma * Dim * r_ * r_ + 1 +
                      std::ceil(double(n) / kRbfBlock) + kRbfBlock + 1 + 8;
   const double k_w2 = Dim + 2 + 2 * std::sqrt(gamma * Dim) * r_;
@@ -341,8 +356,11 @@ void FgtLocalGrid<Dim, MaxM>::build(const Sv& sv, const Coef& coef, double gamma
   bound_.resize(w_t.size());
   // The bound's own sums ran in double: a few hundred roundings of relative size u at most,
   // covered by the factor 1 + 1e-9.
+  std::array<double, MaxM> w_total{};
+  for (int m = 0; m < M; ++m) w_total[ix(m)] = coef.row(m).cwiseAbs().sum() * (1.0 + 1e-9);
   for (std::size_t i = 0; i < w_t.size(); ++i)
-    bound_[i] = static_cast<double>((trunc[i] + u * (k_w * w_t[i] + k_w2 * w2_t[i])) * (1.0L + 1e-6L)) * (1.0 + 1e-9);
+    bound_[i] = static_cast<double>((trunc[i] + u * (k_w * w_t[i] + k_w2 * w2_t[i])) * (1.0L + 1e-6L)) * (1.0 + 1e-9) +
+                w_total[i % ix(M)] * underflow_scale;
 }
 
 }  // namespace ctxfuse::classify::svm_detail
