@@ -122,7 +122,8 @@ class SvmFastRbf {
 
   explicit SvmFastRbf(const Model& model, SvmFastRbfOptions options = {}) : model_(model), options_(options) {
     if (model_.kernel == SvmKernel::rbf && svm_model_problem(model_).empty() && Dim <= 8) build();
-    if (plan_.eligible && options_.target_grid) {
+    // Not in exact mode, which never reads it.
+    if (plan_.eligible && options_.target_grid && options_.mode != SvmFastRbfOptions::Mode::exact) {
       typename svm_detail::FgtLocalGrid<Dim, Model::kMaxMachines>::Limits lim;
       lim.truncation_target = options_.truncation_target;
       lim.max_order = options_.max_order;
@@ -131,7 +132,7 @@ class SvmFastRbf {
       // about twice an exact one, svm_bench.cpp), and the budget.
       lim.max_build_terms = std::min(options_.max_build_terms,
                                      2e4 * double(model_.num_support_vectors()) * model_.num_machines());
-      target_.build(model_.support_vectors, model_.coefficients, model_.gamma, exp_, lim);
+      target_.build(model_.support_vectors, model_.coefficients, weight_total_, model_.gamma, exp_, lim);
       plan_.target = target_.plan();
       // Per query inside the grid (svm_bench.cpp): ~0.5 ns per term and machine + 60 ns.
       if (plan_.target.cells > 0) plan_.fast_cost = std::min(plan_.fast_cost, 0.5 * plan_.target.terms * model_.num_machines() + 60.0);

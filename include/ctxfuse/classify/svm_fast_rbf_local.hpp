@@ -97,9 +97,11 @@ class FgtLocalGrid {
   const FgtLocalPlan& plan() const { return plan_; }
 
   /// Builds the grid for the model's standardised support vectors sv (n x Dim) and coefficients
-  /// (M x n); leaves it empty when no grid fits the limits.
+  /// (M x n), w_total[m] >= sum_s |coef(m, s)| (the caller's, rounded up); leaves it empty when
+  /// no grid fits the limits.
   template <class Sv, class Coef>
-  void build(const Sv& sv, const Coef& coef, double gamma, const RbfExp& exp, const Limits& lim);
+  void build(const Sv& sv, const Coef& coef, const std::array<double, MaxM>& w_total, double gamma, const RbfExp& exp,
+             const Limits& lim);
 
   /// Sums (without rho) and bounds of every machine for the standardised query xs; false (and
   /// nothing written) when xs is outside the grid. No allocation.
@@ -191,7 +193,8 @@ class FgtLocalGrid {
 
 template <int Dim, int MaxM>
 template <class Sv, class Coef>
-void FgtLocalGrid<Dim, MaxM>::build(const Sv& sv, const Coef& coef, double gamma, const RbfExp& exp, const Limits& lim) {
+void FgtLocalGrid<Dim, MaxM>::build(const Sv& sv, const Coef& coef, const std::array<double, MaxM>& w_total, double gamma,
+                                    const RbfExp& exp, const Limits& lim) {
   using LD = long double;
   const auto ix = [](long i) { return static_cast<std::size_t>(i); };
   plan_ = {};
@@ -275,7 +278,6 @@ void FgtLocalGrid<Dim, MaxM>::build(const Sv& sv, const Coef& coef, double gamma
   const int p = best.p;
   plan_.order = p;
   plan_.terms = best.terms;
-  machines_ = M;
   const double h = best.h, rb = h / 2 * (1.0 + 1e-9);
   r_ = h / 2 * (1.0 + 1e-12);
   const int T = best.terms;
@@ -356,8 +358,6 @@ void FgtLocalGrid<Dim, MaxM>::build(const Sv& sv, const Coef& coef, double gamma
   bound_.resize(w_t.size());
   // The bound's own sums ran in double: a few hundred roundings of relative size u at most,
   // covered by the factor 1 + 1e-9.
-  std::array<double, MaxM> w_total{};
-  for (int m = 0; m < M; ++m) w_total[ix(m)] = coef.row(m).cwiseAbs().sum() * (1.0 + 1e-9);
   for (std::size_t i = 0; i < w_t.size(); ++i)
     bound_[i] = static_cast<double>((trunc[i] + u * (k_w * w_t[i] + k_w2 * w2_t[i])) * (1.0L + 1e-6L)) * (1.0 + 1e-9) +
                 w_total[i % ix(M)] * underflow_scale;
