@@ -11,9 +11,9 @@ set -uo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 source "$repo/scripts/deps.sh"
 build="$repo/build/release-v3"
-tests=(core/core_layout_test core/core_numerics_test core/core_block_sparsity_test
-       filters/filters_ekf_test filters/filters_eskf_test filters/filters_bad_input_test
-       imm/imm_cycle_test imm/imm_api_test imm/imm_mixing_fkf_test imm/imm_planar_test)
+# The areas' test executables (tests/CMakeLists.txt): core, filters (EKF, ESKF, bad input,
+# multilateration, fixed-lag RTS) and IMM (cycle, API, mixing, planar Jacobians).
+tests=(core/core_tests filters/filters_tests imm/imm_tests)
 targets=(bench_imm bench_imm_steps)
 for t in "${tests[@]}"; do targets+=("$(basename "$t")"); done
 (cd "$repo" && ctxfuse_configure release-v3 >/dev/null) || exit 1

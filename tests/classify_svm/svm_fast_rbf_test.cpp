@@ -34,8 +34,6 @@ namespace {
 using namespace ctxfuse::classify;
 using Mode = SvmFastRbfOptions::Mode;
 
-void quiet(const char*) {}
-
 std::string fmt(double v) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%.3g", v);
@@ -198,7 +196,7 @@ struct Trained {
 
 // libsvm's C-SVC with the benchmark's parameters (gamma 0.5, C 1, probabilities) on t's rows.
 void train_rows(Trained& t, unsigned seed) {
-  svm_set_print_string_function(&quiet);
+  svm_set_print_string_function(&ctxfuse::test::quiet);
   for (auto& r : t.rows) t.ptrs.push_back(r.data());
   t.problem = {static_cast<int>(t.rows.size()), t.y.data(), t.ptrs.data()};
   const svm_parameter p = ctxfuse::bench::nlos_bench_svm_parameters(100);

@@ -21,8 +21,6 @@ namespace {
 
 using namespace ctxfuse::classify;
 
-void quiet(const char*) {}
-
 struct Case {
   const char* name;
   int kernel;  // LINEAR or RBF
@@ -57,7 +55,7 @@ std::unique_ptr<HandProblem> make_problem(const ctxfuse::test::LabelledSet& s, b
 
 template <int Dim>
 void run_case(const Case& c) {
-  svm_set_print_string_function(&quiet);
+  svm_set_print_string_function(&ctxfuse::test::quiet);
   std::vector<std::vector<double>> centres = {{0, 0, 0}, {2, 1, -1}, {-1, 2, 1}, {1, -2, 2}};
   std::vector<int> labels = {7, -3, 12, 4};
   centres.resize(static_cast<std::size_t>(c.classes));

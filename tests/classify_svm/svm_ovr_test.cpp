@@ -17,10 +17,8 @@ namespace {
 
 using namespace ctxfuse::classify;
 
-void quiet(const char*) {}
-
 TEST(SvmOneVsRest, MatchesHandTrainedBinaryLibsvmMachines) {
-  svm_set_print_string_function(&quiet);
+  svm_set_print_string_function(&ctxfuse::test::quiet);
   const std::vector<int> labels = {2, 9, 4};
   const auto data = ctxfuse::test::gaussian_clusters({{0, 0}, {2, 0.5}, {0.8, 2}}, labels, 70, {0.9, 0.9}, 21);
   const SvmFeatures<2> x = data.x;

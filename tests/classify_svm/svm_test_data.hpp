@@ -71,4 +71,7 @@ classify::SvmModel<Dim, MaxClasses> random_model(classify::SvmKernel kernel, cla
   return m;
 }
 
+// A print function for libsvm's svm_set_print_string_function that prints nothing.
+inline void quiet(const char*) {}
+
 }  // namespace ctxfuse::test

@@ -17,7 +17,8 @@
 
 namespace fs = std::filesystem;
 
-namespace {
+// Named, not anonymous: the area's sources share one unity build (tests/CMakeLists.txt).
+namespace cli_commands_cli {
 
 ctxfuse::test::CliRun run(const std::string& args) { return ctxfuse::test::run_cli(args); }
 
@@ -54,8 +55,6 @@ const fs::path& logs() {
   }();
   return dir;
 }
-
-}  // namespace
 
 TEST(CliSim, WritesAllSevenLogs) {
   const auto& d = logs();
@@ -279,3 +278,5 @@ TEST(CliDemo, PlotsArePngFilesOrAClearMessage) {
     EXPECT_EQ(static_cast<double>(cdf.at(name).size()), doc.at("nlos_uwb").at("positioning").at(name).at("count").get<double>()) << name;
   }
 }
+
+}  // namespace cli_commands_cli

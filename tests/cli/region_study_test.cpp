@@ -29,7 +29,8 @@ namespace fs = std::filesystem;
 namespace ri = ctxfuse::pipelines::region_imm;
 namespace sim = ctxfuse::sim;
 
-namespace {
+// Named, not anonymous: the area's sources share one unity build (tests/CMakeLists.txt).
+namespace region_study_cli {
 
 ctxfuse::test::CliRun run(const std::string& args) { return ctxfuse::test::run_cli(args, ctxfuse::test::Stderr::separate); }
 
@@ -340,4 +341,4 @@ TEST(RegionStudyUsage, BadFlagsExitTwoNamingTheProblem) {
   EXPECT_NE(help.out.find("--indoor-fix-error"), std::string::npos);
 }
 
-}  // namespace
+}  // namespace region_study_cli

@@ -18,7 +18,8 @@
 
 namespace fs = std::filesystem;
 
-namespace {
+// Named, not anonymous: the area's sources share one unity build (tests/CMakeLists.txt).
+namespace run_gins_platform_cli {
 
 ctxfuse::test::CliRun run(const std::string& args) { return ctxfuse::test::run_cli(args, ctxfuse::test::Stderr::separate); }
 
@@ -143,4 +144,4 @@ TEST(CliRunGinsPlatforms, TheRealDriveScoredAgainstAReferenceFileAndItsCutCsv) {
   fs::remove_all(dir);
 }
 
-}  // namespace
+}  // namespace run_gins_platform_cli

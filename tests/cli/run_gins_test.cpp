@@ -21,7 +21,8 @@
 
 namespace fs = std::filesystem;
 
-namespace {
+// Named, not anonymous: the area's sources share one unity build (tests/CMakeLists.txt).
+namespace run_gins_cli {
 
 ctxfuse::test::CliRun run(const std::string& args) { return ctxfuse::test::run_cli(args, ctxfuse::test::Stderr::separate); }
 
@@ -206,4 +207,4 @@ TEST(CliRunGins, PlotsAgreeWithTheOutageScores) {
   fs::remove_all(tmp);
 }
 
-}  // namespace
+}  // namespace run_gins_cli

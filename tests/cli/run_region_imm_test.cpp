@@ -19,7 +19,8 @@
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-namespace {
+// Named, not anonymous: the area's sources share one unity build (tests/CMakeLists.txt).
+namespace run_region_imm_cli {
 
 ctxfuse::test::CliRun run(const std::string& args) { return ctxfuse::test::run_cli(args, ctxfuse::test::Stderr::separate); }
 
@@ -111,4 +112,4 @@ TEST(RunRegionImm, OptionsAreCheckedAndHelpListsThePipelinesAndTheirFiles) {
   fs::remove_all(dir.parent_path());
 }
 
-}  // namespace
+}  // namespace run_region_imm_cli

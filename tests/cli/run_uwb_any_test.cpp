@@ -30,7 +30,8 @@
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-namespace {
+// Named, not anonymous: the area's sources share one unity build (tests/CMakeLists.txt).
+namespace run_uwb_any_cli {
 
 ctxfuse::test::CliRun run(const std::string& args) { return ctxfuse::test::run_cli(args, ctxfuse::test::Stderr::separate); }
 
@@ -64,8 +65,6 @@ void copy_ranges(const fs::path& from, const fs::path& to) {
 
 constexpr const char* kCases[] = {"LOS/Trajectory_A/Case_1", "LOS/Trajectory_A/Case_2", "NLOS/Trajectory_A/Case_1",
                                   "NLOS/Trajectory_A/Case_2"};
-
-}  // namespace
 
 TEST(CliRunUwbAny, EveryCaseWithAndWithoutItsReference) {
   CTXFUSE_REQUIRE_DATA(root, "uwb-outdoor-hanyang/Dynamic_measurements");
@@ -253,3 +252,5 @@ TEST(CliRunUwbAny, SimulatedIndoorYardBelowLeastSquares) {
   EXPECT_NEAR(read_json(tmp / "s.json").at("rmse_2d_m").get<double>(), ekf, 1e-6);
   fs::remove_all(tmp);
 }
+
+}  // namespace run_uwb_any_cli

@@ -24,11 +24,10 @@
 
 namespace fs = std::filesystem;
 
-namespace {
+// Named, not anonymous: the area's sources share one unity build (tests/CMakeLists.txt).
+namespace run_uwb_cli {
 
 ctxfuse::test::CliRun run(const std::string& args) { return ctxfuse::test::run_cli(args, ctxfuse::test::Stderr::separate); }
-
-}  // namespace
 
 TEST(CliRunUwb, TrajectoryAndMetricsOfOneCase) {
   CTXFUSE_REQUIRE_DATA(dir, "uwb-outdoor-hanyang/Dynamic_measurements/NLOS/Trajectory_A/Case_1");
@@ -150,3 +149,5 @@ TEST(CliRunUwb, PlotsAgreeWithTheMetrics) {
   EXPECT_NEAR(eskf, doc.at("authors_rmse_2d_m").at("ESKF").get<double>(), 1e-3);
   fs::remove_all(tmp);
 }
+
+}  // namespace run_uwb_cli

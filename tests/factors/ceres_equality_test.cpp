@@ -15,7 +15,7 @@ using namespace ctxfuse;
 using test::autodiff_cost;
 using PV3 = Layout<StateBlock<"p", 3>, StateBlock<"v", 3>>;
 
-Vector<6> state(int k) {
+Vector<6> sample_state(int k) {
   Vector<6> x;
   x << 1.0 + k, -2.0 + 0.5 * k, 0.3 * k, 2.0 - k, 0.7, -0.4 * k;
   return x;
@@ -58,42 +58,42 @@ TEST(CeresEquality, AutoDiffJacobiansEqualAnalyticOnes) {
     range.anchor = {5.0, -3.0, 2.5};
     range.sigma = 0.15;
     MeasurementFactor<6, models::RangeToPoint<PV3, 3>> rf;
-    ASSERT_TRUE(make_measurement_factor<6>(range, Vector<1>(4.0), state(k), rf));
-    EXPECT_LT(unary_gap(rf, state(k)), 1e-9) << "range " << k;
+    ASSERT_TRUE(make_measurement_factor<6>(range, Vector<1>(4.0), sample_state(k), rf));
+    EXPECT_LT(unary_gap(rf, sample_state(k)), 1e-9) << "range " << k;
 
     models::LinearMeasurement<2, 6> lm;
     lm.H << 1, 0.5, 0, 0, -1, 0, 0, 0, 2, 0.3, 0, 1;
     lm.R << 0.5, 0.1, 0.1, 0.2;
     MeasurementFactor<6, models::LinearMeasurement<2, 6>> lf;
-    ASSERT_TRUE(make_measurement_factor<6>(lm, Vector<2>(0.4, -1.0), state(k), lf));
-    EXPECT_LT(unary_gap(lf, state(k)), 1e-9) << "linear " << k;
+    ASSERT_TRUE(make_measurement_factor<6>(lm, Vector<2>(0.4, -1.0), sample_state(k), lf));
+    EXPECT_LT(unary_gap(lf, sample_state(k)), 1e-9) << "linear " << k;
 
     models::BlockObservation<PV3, "v"> obs;
     MeasurementFactor<6, models::BlockObservation<PV3, "v">> of;
-    ASSERT_TRUE(make_measurement_factor<6>(obs, Vector<3>(1, 2, 3), state(k), of));
-    EXPECT_LT(unary_gap(of, state(k)), 1e-9) << "observation " << k;
+    ASSERT_TRUE(make_measurement_factor<6>(obs, Vector<3>(1, 2, 3), sample_state(k), of));
+    EXPECT_LT(unary_gap(of, sample_state(k)), 1e-9) << "observation " << k;
 
     Gaussian<6> g;
-    g.mean = state(k + 1);
+    g.mean = sample_state(k + 1);
     g.cov.diagonal() << 1, 2, 3, 0.5, 0.25, 4;
     g.cov(0, 3) = g.cov(3, 0) = 0.2;
     PriorFactor<6> pf;
     ASSERT_TRUE(make_prior_factor(g, pf));
-    EXPECT_LT(unary_gap(pf, state(k)), 1e-9) << "prior " << k;
+    EXPECT_LT(unary_gap(pf, sample_state(k)), 1e-9) << "prior " << k;
 
     models::ConstantVelocity<PV3, 3> cv;
     cv.accel_psd = 0.7;
     MotionFactor<models::ConstantVelocity<PV3, 3>> cf;
-    ASSERT_TRUE(make_motion_factor(cv, NoInput{}, 0.1 + 0.2 * k, state(k), cf));
-    EXPECT_LT(binary_gap(cf, state(k), state(k + 1)), 1e-9) << "constant velocity " << k;
+    ASSERT_TRUE(make_motion_factor(cv, NoInput{}, 0.1 + 0.2 * k, sample_state(k), cf));
+    EXPECT_LT(binary_gap(cf, sample_state(k), sample_state(k + 1)), 1e-9) << "constant velocity " << k;
 
     models::LinearProcess<6, 2> lp;
     lp.F = SquareMatrix<6>::Identity() + 0.1 * SquareMatrix<6>::Ones();
     lp.B.setConstant(0.5);
     lp.Q = SquareMatrix<6>::Identity() * (0.1 + k);
     MotionFactor<models::LinearProcess<6, 2>> lpf;
-    ASSERT_TRUE(make_motion_factor(lp, Vector<2>(0.3, -0.2), 0.1, state(k), lpf));
-    EXPECT_LT(binary_gap(lpf, state(k), state(k + 1)), 1e-9) << "linear process " << k;
+    ASSERT_TRUE(make_motion_factor(lp, Vector<2>(0.3, -0.2), 0.1, sample_state(k), lpf));
+    EXPECT_LT(binary_gap(lpf, sample_state(k), sample_state(k + 1)), 1e-9) << "linear process " << k;
 
     using PVB = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>, StateBlock<"b", 3>>;
     models::AveragedRangeWithBias<PVB> avg;
@@ -103,7 +103,7 @@ TEST(CeresEquality, AutoDiffJacobiansEqualAnalyticOnes) {
     avg.period_s = 0.1;
     avg.bias_slot = k % 3;
     Vector<7> xb;
-    xb << state(k).head<4>(), 0.05, -0.02, 0.1 * k;
+    xb << sample_state(k).head<4>(), 0.05, -0.02, 0.1 * k;
     MeasurementFactor<7, models::AveragedRangeWithBias<PVB>> avf;
     ASSERT_TRUE(make_measurement_factor<7>(avg, Vector<1>(6.0), xb, avf));
     EXPECT_LT(unary_gap(avf, xb), 1e-9) << "averaged range with bias " << k;
@@ -111,8 +111,8 @@ TEST(CeresEquality, AutoDiffJacobiansEqualAnalyticOnes) {
     models::AccelerationDriven<PV3, 3> imu;
     imu.accel_psd = 0.05;
     MotionFactor<models::AccelerationDriven<PV3, 3>> af;
-    ASSERT_TRUE(make_motion_factor(imu, Vector<3>(0.3 * k, -1.0, 0.2), 0.01 + 0.05 * k, state(k), af));
-    EXPECT_LT(binary_gap(af, state(k), state(k + 1)), 1e-9) << "acceleration driven " << k;
+    ASSERT_TRUE(make_motion_factor(imu, Vector<3>(0.3 * k, -1.0, 0.2), 0.01 + 0.05 * k, sample_state(k), af));
+    EXPECT_LT(binary_gap(af, sample_state(k), sample_state(k + 1)), 1e-9) << "acceleration driven " << k;
   }
 }
 

@@ -29,13 +29,13 @@ using Cv = models::ConstantVelocity<L, 2>;
 using Pos = models::BlockObservation<L, "p">;
 
 template <class Derived>
-bool same_bytes(const Eigen::DenseBase<Derived>& a, const Eigen::DenseBase<Derived>& b) {
+bool bytes_equal(const Eigen::DenseBase<Derived>& a, const Eigen::DenseBase<Derived>& b) {
   return std::memcmp(a.derived().data(), b.derived().data(),
                      sizeof(typename Derived::Scalar) * static_cast<std::size_t>(a.size())) == 0;
 }
-bool same_bytes(const Gaussian<4>& a, const Gaussian<4>& b) { return same_bytes(a.mean, b.mean) && same_bytes(a.cov, b.cov); }
+bool bytes_equal(const Gaussian<4>& a, const Gaussian<4>& b) { return bytes_equal(a.mean, b.mean) && bytes_equal(a.cov, b.cov); }
 
-Gaussian<4> prior() {
+Gaussian<4> start_belief() {
   Gaussian<4> b{Vector<4>(1.0, 2.0, 0.5, -0.25), SquareMatrix<4>::Identity()};
   b.cov(0, 2) = b.cov(2, 0) = 0.1;
   return b;
@@ -48,7 +48,7 @@ void expect_wrong_size(Status s, Problem p) {
 
 TEST(WrongSize, EkfUpdateRefusesRunTimeSizedMeasurementsOfTheWrongSize) {
   const Pos pos;
-  const Gaussian<4> before = prior();
+  const Gaussian<4> before = start_belief();
   // Heap vectors (ASan sees a read past their end), a Map over one double, a dynamic segment.
   const Eigen::VectorXd short_z = Eigen::VectorXd::Constant(1, 0.3);
   const Eigen::VectorXd long_z = Eigen::VectorXd::Constant(3, 0.3);
@@ -63,17 +63,17 @@ TEST(WrongSize, EkfUpdateRefusesRunTimeSizedMeasurementsOfTheWrongSize) {
   expect_wrong_size(ekf::update<4>(pos, b, wide_z), Problem::measurement_wrong_size);
   expect_wrong_size(ekf::update<4>(pos, b, map_z), Problem::measurement_wrong_size);
   expect_wrong_size(ekf::update<4>(pos, b, three.segment(0, 1)), Problem::measurement_wrong_size);
-  EXPECT_TRUE(same_bytes(before, b));
+  EXPECT_TRUE(bytes_equal(before, b));
 
   Ekf<Cv, policies::ChiSquareGate> filter(Cv{}, before, {}, policies::ChiSquareGate(0.99));
   expect_wrong_size(filter.update(pos, short_z), Problem::measurement_wrong_size);
   expect_wrong_size(filter.score(pos, short_z), Problem::measurement_wrong_size);
-  EXPECT_TRUE(same_bytes(before, filter.belief()));
+  EXPECT_TRUE(bytes_equal(before, filter.belief()));
 
   fkf::FederatedFilter<Cv, 2> fed(Cv{}, before, {0.5, 0.5});
   expect_wrong_size(fed.update(1, pos, long_z), Problem::measurement_wrong_size);
   const SquareMatrix<4> local_cov = before.cov / 0.5;
-  EXPECT_TRUE(same_bytes(local_cov, fed.local(1).cov));
+  EXPECT_TRUE(bytes_equal(local_cov, fed.local(1).cov));
 
   MeasurementFactor<4, Pos> factor{pos, Vector<2>(7.0, 7.0), SquareMatrix<2>::Identity()};
   expect_wrong_size(make_measurement_factor<4>(pos, short_z, before.mean, factor), Problem::measurement_wrong_size);
@@ -92,34 +92,34 @@ TEST(WrongSize, RightSizedRunTimeVectorsUpdateAsTheFixedSizeOnes) {
   const Eigen::VectorXd z_dyn = (Eigen::VectorXd(2) << 1.3, 1.7).finished();
   const std::vector<double> raw{9.0, 1.3, 1.7};
   const Eigen::Map<const Eigen::VectorXd> z_map(raw.data() + 1, 2);
-  Gaussian<4> fixed = prior(), dynamic = prior(), mapped = prior();
+  Gaussian<4> fixed = start_belief(), dynamic = start_belief(), mapped = start_belief();
   ASSERT_TRUE(ekf::update<4>(pos, fixed, Vector<2>(1.3, 1.7)));
   ASSERT_TRUE(ekf::update<4>(pos, dynamic, z_dyn));
   ASSERT_TRUE(ekf::update<4>(pos, mapped, z_map));
-  EXPECT_TRUE(same_bytes(fixed, dynamic));
-  EXPECT_TRUE(same_bytes(fixed, mapped));
+  EXPECT_TRUE(bytes_equal(fixed, dynamic));
+  EXPECT_TRUE(bytes_equal(fixed, mapped));
 }
 
 TEST(WrongSize, PredictionsRefuseRunTimeSizedInputsOfTheWrongSize) {
   const models::LinearProcess<4, 2> lp;
-  const Gaussian<4> before = prior();
+  const Gaussian<4> before = start_belief();
   Gaussian<4> b = before;
   const Eigen::VectorXd short_u = Eigen::VectorXd::Constant(1, 0.1);
   expect_wrong_size(ekf::predict(lp, b, short_u, 0.1), Problem::input_wrong_size);
-  EXPECT_TRUE(same_bytes(before, b));
+  EXPECT_TRUE(bytes_equal(before, b));
 
   Ekf<models::LinearProcess<4, 2>> filter(lp, before);
   filter.set_time(0.0);
   expect_wrong_size(filter.predict(short_u, 0.1), Problem::input_wrong_size);
   expect_wrong_size(filter.predict_to(0.1, short_u), Problem::input_wrong_size);
-  EXPECT_TRUE(same_bytes(before, filter.belief()));
+  EXPECT_TRUE(bytes_equal(before, filter.belief()));
   EXPECT_EQ(filter.time(), 0.0);
 
   const Eigen::VectorXd u = (Eigen::VectorXd(2) << 0.1, -0.2).finished();
   Gaussian<4> fixed = before;
   ASSERT_TRUE(ekf::predict(lp, fixed, Vector<2>(0.1, -0.2), 0.1));
   ASSERT_TRUE(filter.predict_to(0.1, u));
-  EXPECT_TRUE(same_bytes(fixed, filter.belief()));
+  EXPECT_TRUE(bytes_equal(fixed, filter.belief()));
   EXPECT_EQ(filter.time(), 0.1);
 
   MotionFactor<models::LinearProcess<4, 2>> motion{lp, Vector<2>::Zero(), 1.0, SquareMatrix<4>::Identity()};
@@ -136,12 +136,12 @@ TEST(WrongSize, EskfRefusesRunTimeSizedFixesOfTheWrongSize) {
   const models::GnssPosition<> gnss;
   const Eigen::VectorXd fix2 = Eigen::VectorXd::Constant(2, 1.0);
   expect_wrong_size(eskf::update(model, gnss, belief, fix2), Problem::measurement_wrong_size);
-  EXPECT_TRUE(same_bytes(before.nominal.p, belief.nominal.p));
-  EXPECT_TRUE(same_bytes(before.cov, belief.cov));
+  EXPECT_TRUE(bytes_equal(before.nominal.p, belief.nominal.p));
+  EXPECT_TRUE(bytes_equal(before.cov, belief.cov));
 
   Eskf<models::Ins15Model> filter(model, before);
   expect_wrong_size(filter.update(gnss, fix2), Problem::measurement_wrong_size);
-  EXPECT_TRUE(same_bytes(before.cov, filter.belief().cov));
+  EXPECT_TRUE(bytes_equal(before.cov, filter.belief().cov));
 }
 
 // score() is the update's arithmetic without the update: the same NIS, log-likelihood and gate
@@ -150,10 +150,10 @@ TEST(Score, ReportsWhatTheUpdateWouldAndChangesNothing) {
   const Pos pos;
   const policies::ChiSquareGate gate(0.99);
   for (const Vector<2>& z : {Vector<2>(1.3, 1.7), Vector<2>(9.0, -6.0)}) {
-    Ekf<Cv, policies::ChiSquareGate> filter(Cv{}, prior(), {}, gate);
+    Ekf<Cv, policies::ChiSquareGate> filter(Cv{}, start_belief(), {}, gate);
     const Gaussian<4> before = filter.belief();
     const Status scored = filter.score(pos, z);
-    EXPECT_TRUE(same_bytes(before, filter.belief()));
+    EXPECT_TRUE(bytes_equal(before, filter.belief()));
     const Status updated = filter.update(pos, z);
     EXPECT_EQ(scored.outcome, updated.outcome);
     EXPECT_EQ(scored.dof, 2);
@@ -178,7 +178,7 @@ TEST(Score, ReportsWhatTheUpdateWouldAndChangesNothing) {
   const models::GnssPosition<> gnss;
   const auto before = belief;
   const Status scored = score(gnss, belief, Vector<3>(1.2, 2.1, 2.9));
-  EXPECT_TRUE(same_bytes(before.cov, belief.cov));
+  EXPECT_TRUE(bytes_equal(before.cov, belief.cov));
   const Status updated = eskf::update(model, gnss, belief, Vector<3>(1.2, 2.1, 2.9));
   EXPECT_EQ(scored.nis, updated.nis);
   EXPECT_EQ(scored.log_likelihood, updated.log_likelihood);
@@ -186,7 +186,7 @@ TEST(Score, ReportsWhatTheUpdateWouldAndChangesNothing) {
 
 TEST(Score, InvalidMeasurementsAreNamedAsTheUpdateNamesThem) {
   const Pos pos;
-  const Gaussian<4> b = prior();
+  const Gaussian<4> b = start_belief();
   const double nan = std::numeric_limits<double>::quiet_NaN();
   EXPECT_EQ(score(pos, b, Vector<2>(nan, 0.0)).problem, Problem::non_finite_measurement);
   Gaussian<4> bad = b;

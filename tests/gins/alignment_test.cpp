@@ -16,11 +16,12 @@
 
 #include "ctxfuse/models/alignment.hpp"
 #include "ctxfuse/pipelines/gins/forward.hpp"
+#include "gins/states.hpp"
 
 namespace {
 using namespace ctxfuse;
 namespace gins = ctxfuse::pipelines::gins;
-constexpr double kDeg = std::numbers::pi / 180.0;
+using ctxfuse::test::kDeg;
 
 TEST(DynamicAligner, ReceiverVelocityGivesTheHeadingWithItsCrossTrackSigma) {
   models::AlignmentOptions o;
@@ -141,14 +142,14 @@ std::vector<std::pair<double, PlanarState>> simulate(const Motion& m, double fix
   return out;
 }
 
-struct Outcome {
+struct AlignOutcome {
   std::optional<models::PlanarAlignment> al;
   double heading_true = 0.0;
 };
 
 // Fixes with white noise (position sigma_p per axis, velocity sigma_v), reported with those
 // sigmas and floored as the GNSS/INS pass floors them (RTK fixed: 5 cm, velocity 5 cm/s).
-Outcome align(const Motion& m, gins::Platform platform, double fix_hz, bool with_velocity, double sigma_p, unsigned seed) {
+AlignOutcome align(const Motion& m, gins::Platform platform, double fix_hz, bool with_velocity, double sigma_p, unsigned seed) {
   const gins::Settings s = gins::settings_for(platform);
   models::DynamicAligner aligner(gins::alignment_options(s));
   std::mt19937 rng(seed);
@@ -156,7 +157,7 @@ Outcome align(const Motion& m, gins::Platform platform, double fix_hz, bool with
   const double sigma_v = 0.03;
   const double floor_p = std::max(sigma_p, s.gnss_position_sigma_floor_m);
   const double floor_v = std::max(sigma_v, s.gnss_velocity_sigma_floor_mps);
-  Outcome o;
+  AlignOutcome o;
   for (const auto& [t, x] : simulate(m, fix_hz, m.rest_s + 30.0)) {
     models::PlanarFix f;
     f.t = t;
@@ -174,7 +175,7 @@ Outcome align(const Motion& m, gins::Platform platform, double fix_hz, bool with
   return o;
 }
 
-void expect_aligned(const Outcome& o, const Motion& m, double within_s, const char* what) {
+void expect_aligned(const AlignOutcome& o, const Motion& m, double within_s, const char* what) {
   ASSERT_TRUE(o.al.has_value()) << what;
   EXPECT_GT(o.al->t, m.rest_s) << what << ": aligned while at rest";
   EXPECT_LE(o.al->t - m.rest_s, within_s) << what;
@@ -187,7 +188,7 @@ TEST(PlatformAlignment, ACarAtFiveToTwentyMetresASecondAlignsWithinTwoSecondsOfM
     for (bool vel : {true, false})
       for (unsigned seed = 1; seed <= 5; ++seed) {
         const Motion car{8.0, v, 2.5, 200.0, 30.0};
-        const Outcome o = align(car, gins::Platform::car, 4.0, vel, 0.02, seed);
+        const AlignOutcome o = align(car, gins::Platform::car, 4.0, vel, 0.02, seed);
         expect_aligned(o, car, 2.0, vel ? "car, receiver velocity" : "car, positions");
         if (vel) {
           EXPECT_EQ(o.al->source, models::HeadingSource::receiver_velocity);
@@ -201,13 +202,13 @@ TEST(PlatformAlignment, APedestrianWithTightTurnsAlignsWithinSecondsAtOneAndFour
   for (double hz : {1.0, 4.0})
     for (bool vel : {true, false})
       for (unsigned seed = 1; seed <= 5; ++seed) {
-        const Outcome o = align(walk, gins::Platform::pedestrian, hz, vel, 0.02, seed);
+        const AlignOutcome o = align(walk, gins::Platform::pedestrian, hz, vel, 0.02, seed);
         // 5 deg needs 0.8 m with RTK fixes, i.e. the first metre (the 1 m minimum) and the fix after it.
         expect_aligned(o, walk, hz == 1.0 ? 3.5 : 2.5, vel ? "walk, receiver velocity" : "walk, positions");
       }
   // Float fixes (25 cm floor): 5 deg needs a 4 m straight baseline, one whole leg.
   for (unsigned seed = 1; seed <= 5; ++seed) {
-    const Outcome o = align(walk, gins::Platform::pedestrian, 4.0, false, 0.2, seed);
+    const AlignOutcome o = align(walk, gins::Platform::pedestrian, 4.0, false, 0.2, seed);
     ASSERT_TRUE(o.al.has_value());
     const double err = std::remainder(o.al->heading - o.heading_true, 2.0 * std::numbers::pi);
     EXPECT_LT(std::abs(err), 3.0 * std::sqrt(o.al->heading_var)) << "float, seed " << seed;
@@ -218,7 +219,7 @@ TEST(PlatformAlignment, ARobotAtThirtyCentimetresASecondAlignsWithinTenSeconds) 
   const Motion robot{10.0, 0.3, 0.5, 6.0, 0.5};
   for (bool vel : {true, false})
     for (unsigned seed = 1; seed <= 5; ++seed) {
-      const Outcome o = align(robot, gins::Platform::robot, 4.0, vel, 0.02, seed);
+      const AlignOutcome o = align(robot, gins::Platform::robot, 4.0, vel, 0.02, seed);
       // 3 deg with 5 cm fixes: a 1.35 m baseline, 4.5 s at 0.3 m/s (the receiver's velocity,
       // 0.05 m/s at 0.3 m/s, is 9.5 deg: never enough).
       expect_aligned(o, robot, 10.0, "robot");

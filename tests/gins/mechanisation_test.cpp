@@ -14,7 +14,7 @@ using namespace ctxfuse;
 using namespace ctxfuse::models;
 using Full = InsNavModel<FullStrapdown>;
 using Simple = InsNavModel<SimplifiedStrapdown>;
-constexpr double kDeg = test::kDeg;
+using test::kDeg;
 
 NavState at_rest_state(double heading) {
   NavState x;

@@ -8,7 +8,7 @@
 namespace {
 using namespace ctxfuse;
 using namespace ctxfuse::models;
-constexpr double kDeg = test::kDeg;
+using test::kDeg;
 
 // The defaults (0.5 s, 0.25 deg/s on the window's mean rate, 0.25 m/s^2 on its std of |f|) at
 // 100 Hz: static once a full quiet window has come and only then; the mean rate of a slow turn

@@ -17,7 +17,7 @@ using Proc = models::LinearProcess<2>;
 using Meas = models::LinearMeasurement<1, 2>;
 using imm::PriorWeights;
 
-struct AnyTag {};
+struct ApiTag {};
 
 SquareMatrix<3> transition() {
   SquareMatrix<3> T;
@@ -132,7 +132,7 @@ TEST(ImmApi, BothPriorsMatchTheTextbook) {
     EXPECT_EQ(f.combination_weights(), option == PriorWeights::predicted ? c : mu);
 
     // Once the cycle is closed both are the posterior.
-    ASSERT_EQ(f.update(AnyTag{}, position_meas(), Vector<1>(1.3)).accepted_count, 3);
+    ASSERT_EQ(f.update(ApiTag{}, position_meas(), Vector<1>(1.3)).accepted_count, 3);
     f.update_mode_probabilities();
     const Moments post = textbook_combination(f, f.mode_probabilities());
     expect_belief_near(f.combined(PriorWeights::predicted), post, 1e-13);
@@ -154,7 +154,7 @@ TEST(ImmApi, MixingAnOpenCycleIsRefusedAndChangesNothing) {
   ASSERT_TRUE(f.mix());
   EXPECT_TRUE(f.cycle_open());
   ASSERT_TRUE(f.predict({}, 1.0));
-  ASSERT_EQ(f.update(AnyTag{}, position_meas(), Vector<1>(1.3)).accepted_count, 3);
+  ASSERT_EQ(f.update(ApiTag{}, position_meas(), Vector<1>(1.3)).accepted_count, 3);
   const Vector<3> mu = f.mode_probabilities(), c = f.predicted_probabilities(), ll = f.cycle_log_likelihood();
   const SquareMatrix<3> w = f.mixing_weights();
   const auto b0 = f.mode_belief<0>();
@@ -213,12 +213,12 @@ TEST(ImmApi, CycleIsTheSplitStepsInOneCall) {
   for (double z : zs) {
     ASSERT_TRUE(split.mix());
     ASSERT_TRUE(split.predict({}, 1.0));
-    const auto a = split.update(AnyTag{}, position_meas(), Vector<1>(z));
-    const auto b = split.update(AnyTag{}, velocity, Vector<1>(0.8), 0b011u);
+    const auto a = split.update(ApiTag{}, position_meas(), Vector<1>(z));
+    const auto b = split.update(ApiTag{}, velocity, Vector<1>(0.8), 0b011u);
     split.update_mode_probabilities();
 
-    const auto r = one.cycle({}, 1.0, imm::observe(AnyTag{}, position_meas(), Vector<1>(z)),
-                             imm::observe(AnyTag{}, velocity, Vector<1>(0.8), 0b011u));
+    const auto r = one.cycle({}, 1.0, imm::observe(ApiTag{}, position_meas(), Vector<1>(z)),
+                             imm::observe(ApiTag{}, velocity, Vector<1>(0.8), 0b011u));
     ASSERT_TRUE(r.status());
     EXPECT_FALSE(one.cycle_open());
     EXPECT_EQ(r.updates[0].accepted_count, a.accepted_count);
@@ -235,19 +235,19 @@ TEST(ImmApi, CycleReportsARefusedStepAndStaysUsable) {
   const Vector<3> c = transition().transpose() * mu0;  // c_j = sum_i p_ij mu_i
   // A bad time step: no mode predicts, the measurement is not applied, the cycle is closed
   // with mu = c (the probabilities of the mixed beliefs).
-  const auto r = f.cycle({}, -1.0, imm::observe(AnyTag{}, position_meas(), Vector<1>(1.0)));
+  const auto r = f.cycle({}, -1.0, imm::observe(ApiTag{}, position_meas(), Vector<1>(1.0)));
   EXPECT_TRUE(r.mix);
   EXPECT_EQ(r.status().problem, Problem::non_positive_dt);
   EXPECT_EQ(r.updates[0].taken_count, 0);
   EXPECT_FALSE(f.cycle_open());
   EXPECT_LT((f.mode_probabilities() - c).cwiseAbs().maxCoeff(), 1e-15);
   EXPECT_GT((mu0 - c).cwiseAbs().maxCoeff(), 1e-3);  // so the line above tells them apart
-  EXPECT_TRUE(f.cycle({}, 1.0, imm::observe(AnyTag{}, position_meas(), Vector<1>(1.0))).status());
+  EXPECT_TRUE(f.cycle({}, 1.0, imm::observe(ApiTag{}, position_meas(), Vector<1>(1.0))).status());
 
   // An open cycle left by the split steps: cycle() refuses at its mix and changes nothing.
   ASSERT_TRUE(f.mix());
   const Vector<3> mu = f.mode_probabilities();
-  const auto refused = f.cycle({}, 1.0, imm::observe(AnyTag{}, position_meas(), Vector<1>(2.0)));
+  const auto refused = f.cycle({}, 1.0, imm::observe(ApiTag{}, position_meas(), Vector<1>(2.0)));
   EXPECT_EQ(refused.status().problem, Problem::imm_cycle_not_closed);
   EXPECT_EQ(f.mode_probabilities(), mu);
   EXPECT_TRUE(f.cycle_open());

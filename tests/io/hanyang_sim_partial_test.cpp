@@ -27,11 +27,7 @@ using CutReaders = ctxfuse::test::TempFiles;
 
 void write_text(const std::filesystem::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
 
-std::size_t whole_lines(const std::string& text, std::size_t cut) {
-  std::size_t n = 0;
-  for (std::size_t i = 0; i < cut; ++i) n += text[i] == '\n';
-  return n;
-}
+using ctxfuse::test::whole_lines;
 
 /// One reader's records as rows of doubles, so that one routine compares them all.
 using Rows = std::vector<std::vector<double>>;

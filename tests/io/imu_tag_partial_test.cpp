@@ -25,10 +25,7 @@ using namespace ctxfuse::messages;
 using ImuPartial = ctxfuse::test::TempFiles;
 using Method = ImuTimeMapping::Method;
 
-std::string slurp(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using ctxfuse::test::slurp;
 
 // A simulated logging: true times at irregular 6-9 ms steps from t0, the IMU's tick running
 // `rate_ppm` fast with up to +-0.4 ms of stamp jitter, each sample reaching the PC at its true

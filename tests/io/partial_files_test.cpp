@@ -29,21 +29,12 @@ using namespace ctxfuse::io;
 using namespace ctxfuse::messages;
 using Partial = ctxfuse::test::TempFiles;
 
-std::string slurp(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-/// The number of lines of `text` that end, newline included, at or before byte `cut`.
-std::size_t whole_lines(const std::string& text, std::size_t cut) {
-  std::size_t n = 0;
-  for (std::size_t i = 0; i < cut; ++i) n += text[i] == '\n';
-  return n;
-}
+using ctxfuse::test::slurp;
+using ctxfuse::test::whole_lines;
 bool at_line_end(const std::string& text, std::size_t cut) { return cut == 0 || text[cut - 1] == '\n'; }
 
 /// NaN-aware exact equality of doubles.
-bool same(double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); }
+bool same_or_nan(double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); }
 
 TEST_F(Partial, RtklibPosAtEveryByte) {
   std::vector<RtklibPosRecord> in(6);
@@ -97,7 +88,7 @@ TEST_F(Partial, RtklibPosAtEveryByte) {
       ASSERT_EQ(a.t, b.t);
       ASSERT_EQ(a.q, b.q);
       ASSERT_EQ(a.ns, b.ns);
-      for (const auto& c : ctxfuse::io::detail::kPosColumns) ASSERT_TRUE(same(a.*(c.member), b.*(c.member))) << c.name;
+      for (const auto& c : ctxfuse::io::detail::kPosColumns) ASSERT_TRUE(same_or_nan(a.*(c.member), b.*(c.member))) << c.name;
     }
   }
 }
@@ -202,15 +193,15 @@ TEST_F(Partial, NmeaAtEveryByte) {
   ASSERT_EQ(full.epochs[2].satellites.size(), 6u);
   // b equals a; or, for an epoch partly read, holds a's time and a prefix of the rest.
   auto same_epoch = [](const nmea::NmeaEpoch& a, const nmea::NmeaEpoch& b, bool partial) {
-    if (!same(a.time_s, b.time_s)) return false;
-    if (!(partial && std::isnan(b.pdop)) && !same(a.pdop, b.pdop)) return false;
+    if (!same_or_nan(a.time_s, b.time_s)) return false;
+    if (!(partial && std::isnan(b.pdop)) && !same_or_nan(a.pdop, b.pdop)) return false;
     if (!(partial && !b.gga) && a.gga.has_value() != b.gga.has_value()) return false;
     if (b.gga && (!a.gga || a.gga->quality != b.gga->quality || a.gga->latitude_deg != b.gga->latitude_deg ||
                   a.gga->longitude_deg != b.gga->longitude_deg || a.gga->satellites_used != b.gga->satellites_used))
       return false;
     if (partial ? b.satellites.size() > a.satellites.size() : b.satellites.size() != a.satellites.size()) return false;
     for (std::size_t i = 0; i < b.satellites.size(); ++i)
-      if (a.satellites[i].prn != b.satellites[i].prn || !same(a.satellites[i].snr_dbhz, b.satellites[i].snr_dbhz))
+      if (a.satellites[i].prn != b.satellites[i].prn || !same_or_nan(a.satellites[i].snr_dbhz, b.satellites[i].snr_dbhz))
         return false;
     return true;
   };

@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 namespace ctxfuse::test {
@@ -31,6 +32,19 @@ class TempFiles : public ::testing::Test {
   }
   std::filesystem::path dir_;
 };
+
+/// The whole file, bytes as they are.
+inline std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+/// The number of lines of `text` that end, newline included, at or before byte `cut`.
+inline std::size_t whole_lines(const std::string& text, std::size_t cut) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < cut; ++i) n += text[i] == '\n';
+  return n;
+}
 
 }  // namespace ctxfuse::test
 

@@ -12,7 +12,7 @@ namespace {
 namespace fs = std::filesystem;
 using namespace ctxfuse::io;
 
-const char* kHeader =
+const char* kStaticHeader =
     "timestamp,Transmission #,Reception #,maxNoise,Distance,Channel,FirstPathAmp1,FirstPathAmp2,FirstPathAmp3,"
     "Max Growth CIR,Rx Preamble Count,Standard Noise,RSSI(dBm),RSSI_fp(dBm),rtd_init,rtd_resp,resp_rx_ts,"
     "poll_tx_ts,resp_tx_ts,poll_rx_ts,anchor_id\n";
@@ -39,11 +39,11 @@ class UwbStaticFiles : public ::testing::Test {
 };
 
 TEST_F(UwbStaticFiles, ReadsValuesStopsAtSummaryAndSkipsInfinitePower) {
-  write("LOS/height_50.0cm/10m.csv", std::string(kHeader) + row(10.25, "-79.5", "-81.0") + row(10.10, "-inf", "-80.0") +
+  write("LOS/height_50.0cm/10m.csv", std::string(kStaticHeader) + row(10.25, "-79.5", "-81.0") + row(10.10, "-inf", "-80.0") +
                                          row(9.95, "-80.0", "-80.5") + "Distance Mean,10.1\nRSSI(dBm) Mean,-inf\n");
-  write("NLOS/height_50.0cm/4m.csv", std::string(kHeader) + row(4.4, "-78.0", "-80.0") + ",,,,,,,,,,,,, ,,,,,,,\n");
-  write("LOS/height_62.5cm/6m.csv", std::string(kHeader) + row(6.2, "-78.0", "-79.0"));
-  write("NLOS/height_62.5cm/6m.csv", std::string(kHeader));
+  write("NLOS/height_50.0cm/4m.csv", std::string(kStaticHeader) + row(4.4, "-78.0", "-80.0") + ",,,,,,,,,,,,, ,,,,,,,\n");
+  write("LOS/height_62.5cm/6m.csv", std::string(kStaticHeader) + row(6.2, "-78.0", "-79.0"));
+  write("NLOS/height_62.5cm/6m.csv", std::string(kStaticHeader));
   UwbStaticReadStats stats;
   const auto all = read_uwb_static_dataset(root_, {}, stats);
   EXPECT_EQ(stats.files, 4u);
@@ -68,7 +68,7 @@ TEST_F(UwbStaticFiles, ReadsValuesStopsAtSummaryAndSkipsInfinitePower) {
 }
 
 TEST_F(UwbStaticFiles, ErrorsNameFileLineAndColumn) {
-  write("LOS/height_50.0cm/10m.csv", std::string(kHeader) + row(10.2, "-79.5", "-81.0") + row(10.1, "abc", "-80.0"));
+  write("LOS/height_50.0cm/10m.csv", std::string(kStaticHeader) + row(10.2, "-79.5", "-81.0") + row(10.1, "abc", "-80.0"));
   UwbStaticReadStats stats;
   try {
     read_uwb_static_dataset(root_, {}, stats);
@@ -79,7 +79,7 @@ TEST_F(UwbStaticFiles, ErrorsNameFileLineAndColumn) {
     EXPECT_EQ(e.line(), 3u);
     EXPECT_EQ(e.column(), 13u);
   }
-  write("LOS/height_50.0cm/10m.csv", std::string(kHeader) + "1.0,2,3\n");
+  write("LOS/height_50.0cm/10m.csv", std::string(kStaticHeader) + "1.0,2,3\n");
   try {
     read_uwb_static_dataset(root_, {}, stats);
     FAIL() << "expected UwbDataError";
@@ -88,10 +88,10 @@ TEST_F(UwbStaticFiles, ErrorsNameFileLineAndColumn) {
   }
   write("LOS/height_50.0cm/10m.csv", "timestamp,Distance\n1,2\n");
   EXPECT_THROW(read_uwb_static_dataset(root_, {}, stats), UwbDataError);
-  write("LOS/height_50.0cm/10m.csv", std::string(kHeader) + row(-3.0, "-79.5", "-81.0"));
+  write("LOS/height_50.0cm/10m.csv", std::string(kStaticHeader) + row(-3.0, "-79.5", "-81.0"));
   EXPECT_THROW(read_uwb_static_dataset(root_, {}, stats), UwbDataError);
   fs::remove_all(root_ / "LOS" / "height_50.0cm");
-  write("LOS/height_62.5cm/far.csv", std::string(kHeader));
+  write("LOS/height_62.5cm/far.csv", std::string(kStaticHeader));
   EXPECT_THROW(read_uwb_static_dataset(root_, {}, stats), UwbDataError);  // no distance in the name
   fs::remove_all(root_ / "NLOS");
   EXPECT_THROW(read_uwb_static_dataset(root_, {}, stats), UwbDataError);

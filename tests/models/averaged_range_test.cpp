@@ -13,7 +13,7 @@ namespace {
 using namespace ctxfuse;
 using ctxfuse::testing::central_jacobian;
 
-using L = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>, StateBlock<"b", 3>>;
+using BiasedL = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>, StateBlock<"b", 3>>;
 
 Vector<7> state() {
   Vector<7> x;
@@ -21,8 +21,8 @@ Vector<7> state() {
   return x;
 }
 
-models::AveragedRangeWithBias<L> model(const Eigen::Vector3d& anchor, int samples, int bias_slot) {
-  models::AveragedRangeWithBias<L> m;
+models::AveragedRangeWithBias<BiasedL> model(const Eigen::Vector3d& anchor, int samples, int bias_slot) {
+  models::AveragedRangeWithBias<BiasedL> m;
   m.anchor = anchor;
   m.tag_height = 1.0;
   m.samples = samples;

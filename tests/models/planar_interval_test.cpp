@@ -14,8 +14,8 @@ namespace {
 using namespace ctxfuse;
 using models::PlanarImu;
 using models::PlanarLayout;
-using L = PlanarLayout;
-using X = Vector<L::size>;
+using PlanarL = PlanarLayout;
+using X = Vector<PlanarL::size>;
 using Model = models::PlanarImuIntervalModel<8>;
 
 PlanarImu imu(double w, double ax, double ay) {
@@ -50,10 +50,10 @@ TEST(PlanarImuInterval, PredictionChainsTheSamplesStepsWithAContinuousHeading) {
   // Heading: psi0 + sum (w - bg) dt, written out, beyond pi.
   const double psi = x0(4) + (0.40 - 0.01) * 0.010 + (0.45 - 0.01) * 0.012 + (0.50 - 0.01) * 0.008;
   EXPECT_GT(psi, std::numbers::pi);
-  EXPECT_NEAR(got(L::offset<"psi">()), psi, 1e-15);
+  EXPECT_NEAR(got(PlanarL::offset<"psi">()), psi, 1e-15);
   // Every other element as the wrapped steps give it (the wrap does not change sin / cos).
-  for (int i = 0; i < L::size; ++i) {
-    if (i != L::offset<"psi">()) {
+  for (int i = 0; i < PlanarL::size; ++i) {
+    if (i != PlanarL::offset<"psi">()) {
       EXPECT_NEAR(got(i), expected(i), 1e-14) << i;
     }
   }
@@ -64,15 +64,15 @@ TEST(PlanarImuInterval, TransitionEqualsCentralDifferences) {
   const Model m{};
   const Model::Input u = turning_interval();
   const X x0 = state(0.7);
-  SquareMatrix<L::size> F;
+  SquareMatrix<PlanarL::size> F;
   (void)m.predict(x0, u, u.duration(), &F);
-  for (int j = 0; j < L::size; ++j) {
+  for (int j = 0; j < PlanarL::size; ++j) {
     const double h = 1e-6;
     X a = x0, b = x0;
     a(j) += h;
     b(j) -= h;
     const X col = (m.predict(a, u, u.duration(), nullptr) - m.predict(b, u, u.duration(), nullptr)) / (2 * h);
-    for (int i = 0; i < L::size; ++i) EXPECT_NEAR(F(i, j), col(i), 1e-8) << i << "," << j;
+    for (int i = 0; i < PlanarL::size; ++i) EXPECT_NEAR(F(i, j), col(i), 1e-8) << i << "," << j;
   }
 }
 
@@ -82,11 +82,11 @@ TEST(PlanarImuInterval, NoiseIsTheStepsNoisePropagatedThroughTheLaterSteps) {
   u.add(imu(0.3, 1.0, 0.2), 0.01);
   u.add(imu(0.2, 0.5, -0.1), 0.02);
   const X x0 = state(0.4);
-  SquareMatrix<L::size> F1, F2;
+  SquareMatrix<PlanarL::size> F1, F2;
   const X x1 = m.step.predict(x0, u.samples[0], 0.01, &F1);
   (void)m.step.predict(x1, u.samples[1], 0.02, &F2);
-  const SquareMatrix<L::size> Q1 = m.step.noise(x0, u.samples[0], 0.01), Q2 = m.step.noise(x1, u.samples[1], 0.02);
-  const SquareMatrix<L::size> expected = F2 * Q1 * F2.transpose() + Q2;
+  const SquareMatrix<PlanarL::size> Q1 = m.step.noise(x0, u.samples[0], 0.01), Q2 = m.step.noise(x1, u.samples[1], 0.02);
+  const SquareMatrix<PlanarL::size> expected = F2 * Q1 * F2.transpose() + Q2;
   EXPECT_LT((m.noise(x0, u, 0.03) - expected).cwiseAbs().maxCoeff(), 1e-18);
   // One sample: the step's own Q.
   Model::Input one;

@@ -16,7 +16,8 @@
 #include "ctxfuse/filters/ekf.hpp"
 #include "ctxfuse/models/kinematic.hpp"
 
-namespace {
+// Named, not anonymous: the area's sources share one unity build (tests/CMakeLists.txt).
+namespace consistency_ekf {
 using namespace ctxfuse;
 using L = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>>;
 using Cv = models::ConstantVelocity<L, 2>;
@@ -77,4 +78,4 @@ TEST(EkfConsistency, HalvedProcessNoiseIsRejected) {
   EXPECT_FALSE(v.consistent());
 }
 
-}  // namespace
+}  // namespace consistency_ekf

@@ -14,7 +14,8 @@
 #include "ctxfuse/filters/eskf.hpp"
 #include "ctxfuse/models/ins.hpp"
 
-namespace {
+// Named, not anonymous: the area's sources share one unity build (tests/CMakeLists.txt).
+namespace consistency_eskf {
 using namespace ctxfuse;
 using models::Ins15Model;
 using L = models::Ins15Layout;
@@ -48,7 +49,6 @@ Ins15Model scaled(Ins15Model m, double q_factor) {
 // The known motion: body angular rate and navigation-frame acceleration at time t.
 Eigen::Vector3d true_rate(double t) { return {0.05 * std::sin(0.3 * t), 0.04 * std::cos(0.2 * t), 0.15 * std::sin(0.1 * t)}; }
 Eigen::Vector3d true_accel_n(double t) { return {0.6 * std::sin(0.2 * t), 0.5 * std::cos(0.15 * t), 0.1 * std::sin(0.5 * t)}; }
-
 
 reliability::Verdict monte_carlo(double q_factor) {
   const Ins15Model truth_model = imu_model();
@@ -110,4 +110,4 @@ TEST(EskfConsistency, HalvedProcessNoiseIsRejected) {
   EXPECT_FALSE(v.consistent());
 }
 
-}  // namespace
+}  // namespace consistency_eskf

@@ -25,7 +25,8 @@
 #include "ctxfuse/filters/fixed_lag.hpp"
 #include "ctxfuse/models/kinematic.hpp"
 
-namespace {
+// Named, not anonymous: the area's sources share one unity build (tests/CMakeLists.txt).
+namespace consistency_fixed_lag {
 using namespace ctxfuse;
 using L = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>>;
 using Cv = models::ConstantVelocity<L, 2>;
@@ -106,4 +107,4 @@ TEST(FixedLagConsistency, HalvedProcessNoiseIsRejected) {
   EXPECT_FALSE(v.consistent());
 }
 
-}  // namespace
+}  // namespace consistency_fixed_lag

@@ -23,7 +23,8 @@
 #include "ctxfuse/models/ins_nav.hpp"
 #include "ctxfuse/models/ins_updates.hpp"
 
-namespace {
+// Named, not anonymous: the area's sources share one unity build (tests/CMakeLists.txt).
+namespace consistency_gins {
 using namespace ctxfuse;
 using Model = models::InsNavModel<models::FullStrapdown>;
 using State = Model::State;
@@ -45,7 +46,6 @@ Model imu_model(double q_factor) {
 
 Eigen::Vector3d true_rate(double t) { return {0.05 * std::sin(0.3 * t), 0.04 * std::cos(0.2 * t), 0.15 * std::sin(0.1 * t)}; }
 Eigen::Vector3d true_accel_n(double t) { return {0.6 * std::sin(0.2 * t), 0.5 * std::cos(0.15 * t), 0.1 * std::sin(0.5 * t)}; }
-
 
 reliability::Verdict monte_carlo(double q_factor) {
   const Model truth_model = imu_model(1.0);
@@ -111,4 +111,4 @@ TEST(GinsConsistency, HalvedProcessNoiseIsRejected) {
   EXPECT_FALSE(v.consistent());
 }
 
-}  // namespace
+}  // namespace consistency_gins

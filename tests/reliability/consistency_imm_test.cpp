@@ -33,7 +33,8 @@
 #include "ctxfuse/models/kinematic.hpp"
 #include "ctxfuse/policies/mixing.hpp"
 
-namespace {
+// Named, not anonymous: the area's sources share one unity build (tests/CMakeLists.txt).
+namespace consistency_imm {
 using namespace ctxfuse;
 namespace hana = boost::hana;
 using L = Layout<StateBlock<"p", 2>, StateBlock<"v", 2>>;
@@ -150,4 +151,4 @@ TEST(ImmConsistency, HalvedProcessNoiseIsRejected) {
   EXPECT_GT(o.mixture_nees.time_average, o.mixture_nees.time_band.upper);
 }
 
-}  // namespace
+}  // namespace consistency_imm

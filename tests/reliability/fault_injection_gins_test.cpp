@@ -29,7 +29,8 @@
 #include "gins/drive_sim.hpp"
 #include "ctxfuse/instances/gins_nav20.hpp"
 
-namespace {
+// Named, not anonymous: the area's sources share one unity build (tests/CMakeLists.txt).
+namespace fault_injection_gins {
 using namespace ctxfuse;
 using namespace ctxfuse::reliability;
 namespace gins = ctxfuse::pipelines::gins;
@@ -286,4 +287,4 @@ TEST(FaultInjectionGins, ImuAndClockJumps) {
     check_fault(f);
 }
 
-}  // namespace
+}  // namespace fault_injection_gins

@@ -36,7 +36,8 @@
 #include "ctxfuse/sim/streams.hpp"
 #include "fault_injection.hpp"
 
-namespace {
+// Named, not anonymous: the area's sources share one unity build (tests/CMakeLists.txt).
+namespace fault_injection {
 using namespace ctxfuse;
 using namespace ctxfuse::reliability;
 namespace ri = pipelines::region_imm;
@@ -388,4 +389,4 @@ TEST(FaultInjection, SpeedWithTheSpeedUpdate) {
     for (const Fault& f : faults) check_fault(p, f, with_speed());
 }
 
-}  // namespace
+}  // namespace fault_injection

@@ -28,7 +28,8 @@
 #include "ctxfuse/sim/streams.hpp"
 #include "fault_stream.hpp"
 
-namespace {
+// Named, not anonymous: the area's sources share one unity build (tests/CMakeLists.txt).
+namespace fault_injection_uwb {
 using namespace ctxfuse;
 using namespace ctxfuse::reliability;
 namespace nu = pipelines::nlos_uwb;
@@ -220,4 +221,4 @@ TEST(FaultInjectionUwb, Faults) {
   for (const Fault& f : v) check_fault(f);
 }
 
-}  // namespace
+}  // namespace fault_injection_uwb
