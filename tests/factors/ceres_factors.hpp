@@ -4,6 +4,9 @@
 
 #include <ceres/ceres.h>
 
+#include <limits>
+#include <memory>
+
 #include "ctxfuse/core/factor.hpp"
 
 namespace ctxfuse::test {
@@ -40,6 +43,34 @@ template <BinaryFactor F>
 ceres::CostFunction* autodiff_cost(const F& f) {
   return new ceres::AutoDiffCostFunction<BinaryResidual<F>, F::dim, F::slot_dims[0], F::slot_dims[1]>(
       new BinaryResidual<F>{f});
+}
+
+/// The gaps between Ceres' automatic differentiation of a binary factor at (x0, x1) and its
+/// analytic evaluate(): the residuals' largest absolute gap, and each slot's Jacobian's largest
+/// gap relative to its largest analytic entry.
+struct JacobianGaps {
+  double residual = 0.0, slot0 = 0.0, slot1 = 0.0;
+};
+template <BinaryFactor F>
+JacobianGaps jacobian_gaps(const F& f, const Vector<F::slot_dims[0]>& x0, const Vector<F::slot_dims[1]>& x1) {
+  constexpr int m = F::dim, n0 = F::slot_dims[0], n1 = F::slot_dims[1];
+  std::unique_ptr<ceres::CostFunction> cost(autodiff_cost(f));
+  Vector<m> r;
+  Eigen::Matrix<double, m, n0, (n0 == 1 ? Eigen::ColMajor : Eigen::RowMajor)> Ja;
+  Eigen::Matrix<double, m, n1, (n1 == 1 ? Eigen::ColMajor : Eigen::RowMajor)> Jb;
+  const double* params[] = {x0.data(), x1.data()};
+  double* jac[] = {Ja.data(), Jb.data()};
+  JacobianGaps g;
+  if (!cost->Evaluate(params, r.data(), jac)) {
+    g.residual = g.slot0 = g.slot1 = std::numeric_limits<double>::infinity();
+    return g;
+  }
+  Matrix<m, n0> A0;
+  Matrix<m, n1> A1;
+  g.residual = (r - f.evaluate(x0, x1, &A0, &A1)).cwiseAbs().maxCoeff();
+  g.slot0 = (Matrix<m, n0>(Ja) - A0).cwiseAbs().maxCoeff() / A0.cwiseAbs().maxCoeff();
+  g.slot1 = (Matrix<m, n1>(Jb) - A1).cwiseAbs().maxCoeff() / A1.cwiseAbs().maxCoeff();
+  return g;
 }
 
 /// The smoother's window as a Ceres problem over states xs (solved in place): the prior,

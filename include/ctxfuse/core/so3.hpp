@@ -93,4 +93,26 @@ Mat3<typename Derived::Scalar> right_jacobian(const Eigen::MatrixBase<Derived>& 
   return Jr;
 }
 
+/// The inverse of the right Jacobian: Log(Exp(phi) Exp(d)) ~= phi + Jr^-1(phi) d.
+///   Jr^-1 = I + [phi]x / 2 + c [phi]x^2,  c = (1 - (t/2) cot(t/2)) / t^2,  t = |phi| < 2 pi,
+/// with c's series 1/12 + t^2/720 + t^4/30240 for small t, where the closed form cancels.
+template <class Derived>
+Mat3<typename Derived::Scalar> right_jacobian_inverse(const Eigen::MatrixBase<Derived>& phi) {
+  using S = typename Derived::Scalar;
+  using std::cos;
+  using std::sin;
+  using std::sqrt;
+  const S theta2 = phi.squaredNorm();
+  const Mat3<S> K = skew(phi);
+  S c;
+  if (theta2 < S(1e-4)) {
+    c = S(1) / S(12) + theta2 / S(720) + theta2 * theta2 / S(30240);
+  } else {
+    const S theta = sqrt(theta2);
+    const S half = theta / S(2);
+    c = (S(1) - half * cos(half) / sin(half)) / theta2;
+  }
+  return Mat3<S>::Identity() + K / S(2) + c * K * K;
+}
+
 }  // namespace ctxfuse::so3

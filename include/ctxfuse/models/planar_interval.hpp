@@ -13,6 +13,7 @@
 
 #include "ctxfuse/core/status.hpp"
 #include "ctxfuse/core/types.hpp"
+#include "ctxfuse/models/interval_check.hpp"
 #include "ctxfuse/models/planar.hpp"
 
 namespace ctxfuse::models {
@@ -81,7 +82,7 @@ struct PlanarImuIntervalModel {
   /// check_input, and that the spans cover dt.
   Problem check(const Input& u, double dt) const {
     if (Problem p = check_input(u); p != Problem::none) return p;
-    return std::abs(u.duration() - dt) <= duration_tolerance * std::max(1.0, dt) ? Problem::none : Problem::dt_above_maximum;
+    return check_interval_duration(u.duration(), dt, duration_tolerance);
   }
 
   State predict(const State& x, const Input& u, double, SquareMatrix<dim>* F) const {

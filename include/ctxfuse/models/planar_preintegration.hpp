@@ -34,6 +34,7 @@
 
 #include "ctxfuse/core/status.hpp"
 #include "ctxfuse/core/types.hpp"
+#include "ctxfuse/models/interval_check.hpp"
 #include "ctxfuse/models/planar.hpp"
 
 namespace ctxfuse::models {
@@ -162,25 +163,11 @@ class PlanarPreintegrated {
 };
 
 /// The planar IMU state's process model over one preintegrated interval.
-struct PlanarPreintegratedModel {
+struct PlanarPreintegratedModel : PreintegratedIntervalCheck {
   using L = PlanarLayout;
   using State = Vector<L::size>;
   using Input = PlanarPreintegrated;
   static constexpr int dim = L::size;
-
-  /// How far the interval's duration may be from the step's dt (relative): an interval that
-  /// does not cover the step is the caller's error, not motion.
-  double duration_tolerance = 1e-6;
-
-  Problem check_input(const Input& u) const {
-    if (u.count() < 1) return Problem::non_finite_input;
-    return u.is_finite() ? Problem::none : Problem::non_finite_input;
-  }
-  /// check_input, and that the interval covers dt.
-  Problem check(const Input& u, double dt) const {
-    if (Problem p = check_input(u); p != Problem::none) return p;
-    return std::abs(u.duration() - dt) <= duration_tolerance * std::max(1.0, dt) ? Problem::none : Problem::dt_above_maximum;
-  }
 
   template <class T>
   Vector<dim, T> value(const Vector<dim, T>& x, const Input& u, double /*dt*/) const {
