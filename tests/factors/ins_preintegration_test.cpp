@@ -142,7 +142,7 @@ TEST(InsPreintegration, EqualsTheRechainedStepsAtItsBiases) {
     const Samples s = interval(static_cast<int>(5 + 9 * seed), seed);
     const Eigen::Vector3d bg(0.002 * static_cast<double>(seed), -0.001, 0.003);
     const Eigen::Vector3d ba(0.05 * static_cast<double>(seed), -0.03, 0.1);
-    // Attitudes up to 3 rad, the interval's turns taking some across pi.
+    // Attitudes from 0.5 to 3 rad.
     const Eigen::Vector3d phi = Eigen::Vector3d(0.3, -0.5, 0.8).normalized() * (0.5 * static_cast<double>(seed));
     const X x = state(phi, bg, ba);
     const Pre::Input pre = preintegrate(s, bg, ba);

@@ -146,14 +146,14 @@ class InsPreintegrated {
                             double ka) {
     Q_.middleRows<3>(P) += dt * Q_.middleRows<3>(V) + Cp * Q_.middleRows<3>(TH) + Bp * Q_.middleRows<3>(BA);
     Q_.middleRows<3>(V) += Cv * Q_.middleRows<3>(TH) + Bv * Q_.middleRows<3>(BA);
-    rows_ = Et * Q_.middleRows<3>(TH) + G * Q_.middleRows<3>(BG);
-    Q_.middleRows<3>(TH) = rows_;
+    const Matrix<3, dim> rows = Et * Q_.middleRows<3>(TH) + G * Q_.middleRows<3>(BG);
+    Q_.middleRows<3>(TH) = rows;
     Q_.middleRows<3>(BG) *= kg;
     Q_.middleRows<3>(BA) *= ka;
     Q_.middleCols<3>(P) += dt * Q_.middleCols<3>(V) + Q_.middleCols<3>(TH) * Cp.transpose() + Q_.middleCols<3>(BA) * Bp.transpose();
     Q_.middleCols<3>(V) += Q_.middleCols<3>(TH) * Cv.transpose() + Q_.middleCols<3>(BA) * Bv.transpose();
-    cols_ = Q_.middleCols<3>(TH) * Et.transpose() + Q_.middleCols<3>(BG) * G.transpose();
-    Q_.middleCols<3>(TH) = cols_;
+    const Matrix<dim, 3> cols = Q_.middleCols<3>(TH) * Et.transpose() + Q_.middleCols<3>(BG) * G.transpose();
+    Q_.middleCols<3>(TH) = cols;
     Q_.middleCols<3>(BG) *= kg;
     Q_.middleCols<3>(BA) *= ka;
   }
@@ -168,8 +168,6 @@ class InsPreintegrated {
   Eigen::Matrix3d JRg_ = Eigen::Matrix3d::Zero(), Jvg_ = Eigen::Matrix3d::Zero(), Jva_ = Eigen::Matrix3d::Zero(),
                   Jpg_ = Eigen::Matrix3d::Zero(), Jpa_ = Eigen::Matrix3d::Zero();
   SquareMatrix<dim> Q_ = SquareMatrix<dim>::Zero();
-  Matrix<3, dim> rows_ = Matrix<3, dim>::Zero();  // scratch of propagate_covariance
-  Matrix<dim, 3> cols_ = Matrix<dim, 3>::Zero();
 };
 
 /// The 3-D INS state's process model over one preintegrated interval, on the vector state
