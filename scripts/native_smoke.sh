@@ -10,8 +10,8 @@ set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 source "$repo/scripts/deps.sh"
 build="$repo/build/native"
-tests=(core/core_numerics_test core/core_block_sparsity_test filters/filters_ekf_test filters/filters_eskf_test
-       imm/imm_cycle_test imm/imm_mixing_fkf_test)
+# The areas' test executables (tests/CMakeLists.txt): core, filters and IMM.
+tests=(core/core_tests filters/filters_tests imm/imm_tests)
 cmake -S "$repo" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCTXFUSE_NATIVE=ON >/dev/null
 targets=(bench_imm_steps)
 for t in "${tests[@]}"; do targets+=("$(basename "$t")"); done
